@@ -1,0 +1,483 @@
+"""Right-hand sides, Jacobians and contact geometry of the four pounding models.
+
+MODEL.md sections 2-4. Every function dispatches on the integer model id of
+:mod:`chaospound.kernels.params` (WALL, TOWER_WALL, PAIR, TOWERS); state
+layouts:
+
+* WALL       (X_A, X_A')
+* TOWER_WALL (X_A, X_A', Y_A, Y_A', th_A, th_A')
+* PAIR       (X_A, X_A', X_B, X_B')
+* TOWERS     (X_A, X_A', Y_A, Y_A', th_A, th_A', X_B, ..., th_B')
+
+``t`` is the forcing time: the ground motion is ``u_g = sin(t / r)``. Callers
+keep ``t`` reduced to within one excitation period of the section origin so
+that the phase never drifts (see :mod:`chaospound.kernels.integrate`).
+
+Generalised contact forces ``Q = -dV/dq`` of the line contact (MODEL.md 3),
+with ``I0 = (beta/L) int d+^chi dy`` and ``F1 = (beta/L) int d+^chi (y - y_c) dy``::
+
+    Q_XA = -I0,          Q_XB = +I0
+    Q_YA = -th_A I0,     Q_YB = +th_B I0
+    Q_thA = F1 - (y_cA - y_c) I0,   Q_thB = -(F1 - (y_cB - y_c) I0)
+"""
+
+import math
+
+from numba import njit
+
+from .contact import line_contact, line_contact_gradient, line_potential
+from .params import (
+    P_BETA,
+    P_CHI,
+    P_GAP,
+    P_GROUND,
+    P_HALF_L,
+    P_PERIOD_RATIO,
+    P_Y_C,
+    P_Y_OFF,
+    PAIR,
+    T_CT,
+    T_CX,
+    T_CY,
+    T_EX,
+    T_EY,
+    T_KTH,
+    T_MU,
+    T_OM2,
+    T_OMT2,
+    T_RHO2,
+    TOWER_A,
+    TOWER_B,
+    TOWER_WALL,
+    TOWERS,
+    WALL,
+)
+
+
+@njit(cache=True)
+def ground(t, p):
+    """Ground displacement and velocity ``(u_g, u_g')`` at forcing time t."""
+    if p[P_GROUND] == 0.0:
+        return 0.0, 0.0
+    r = p[P_PERIOD_RATIO]
+    arg = t / r
+    return math.sin(arg), math.cos(arg) / r
+
+
+@njit(cache=True)
+def rhs(model, t, y, p, out):
+    """Time derivative of the state (MODEL.md eqs. of section 2), into ``out``."""
+    ug, vg = ground(t, p)
+    if model == TOWERS:
+        _rhs_towers(y, p, ug, vg, out)
+    elif model == PAIR:
+        _rhs_pair(y, p, ug, vg, out)
+    elif model == TOWER_WALL:
+        _rhs_tower_wall(y, p, ug, vg, out)
+    else:
+        _rhs_wall(y, p, ug, vg, out)
+
+
+@njit(cache=True)
+def jacobian(model, t, y, p, jac):
+    """Analytic Jacobian ``d rhs / d y`` (dim x dim), into ``jac``."""
+    ug, _ = ground(t, p)
+    jac[:, :] = 0.0
+    if model == TOWERS:
+        _jac_tower_linear(p, TOWER_A, 0, jac)
+        _jac_tower_linear(p, TOWER_B, 6, jac)
+        _jac_contact_towers(y, p, jac)
+    elif model == PAIR:
+        _jac_pair(y, p, jac)
+    elif model == TOWER_WALL:
+        _jac_tower_linear(p, TOWER_A, 0, jac)
+        _jac_contact_tower_wall(y, p, ug, jac)
+    else:
+        _jac_wall(y, p, ug, jac)
+
+
+@njit(cache=True)
+def contact_ends(model, t, y, p, out):
+    """Penetrations and their rates at the two ends of the contact line.
+
+    Writes ``out[0] = d_lo``, ``out[1] = d_hi``, ``out[2] = d d_lo/dt``,
+    ``out[3] = d d_hi/dt`` (rates at fixed y: the relative velocity of the
+    material points, MODEL.md section 3). For the translational models both
+    ends carry the single penetration d.
+    """
+    ug, vg = ground(t, p)
+    if model == TOWERS or model == TOWER_WALL:
+        half = p[P_HALF_L]
+        y_c = p[P_Y_C]
+        out[0] = _towers_gap(model, y, p, ug, y_c - half)
+        out[1] = _towers_gap(model, y, p, ug, y_c + half)
+        out[2] = penetration_rate(model, t, y, p, y_c - half)
+        out[3] = penetration_rate(model, t, y, p, y_c + half)
+    else:
+        if model == PAIR:
+            d = y[0] - y[2] - p[P_GAP]
+            rate = y[1] - y[3]
+        else:
+            d = y[0] - ug - p[P_GAP]
+            rate = y[1] - vg
+        out[0] = d
+        out[1] = d
+        out[2] = rate
+        out[3] = rate
+
+
+@njit(cache=True)
+def penetration_rate(model, t, y, p, y_at):
+    """Relative impact velocity ``partial d / partial t`` at global height ``y_at``.
+
+    ``V = X_A' - X_B' - th_A' (y - y_cA) + th_B' (y - y_cB) + th_A Y_A' - th_B Y_B'``
+    (units of A_g omega_Ax); the wall models use the wall's velocity u_g'.
+    """
+    if model == TOWERS:
+        y_ca = y[2] + p[TOWER_A + T_EY]
+        y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
+        return (
+            y[1] - y[7] - y[5] * (y_at - y_ca) + y[11] * (y_at - y_cb) + y[4] * y[3] - y[10] * y[9]
+        )
+    _, vg = ground(t, p)
+    if model == TOWER_WALL:
+        y_ca = y[2] + p[TOWER_A + T_EY]
+        return y[1] - vg - y[5] * (y_at - y_ca) + y[4] * y[3]
+    if model == PAIR:
+        return y[1] - y[3]
+    return y[1] - vg
+
+
+@njit(cache=True)
+def contact_potential(model, t, y, p):
+    """Contact potential V (MODEL.md section 3), units of A_g^2 k_Ax."""
+    ug, _ = ground(t, p)
+    beta = p[P_BETA]
+    chi = p[P_CHI]
+    if model == TOWERS or model == TOWER_WALL:
+        half = p[P_HALF_L]
+        y_c = p[P_Y_C]
+        d_lo = _towers_gap(model, y, p, ug, y_c - half)
+        d_hi = _towers_gap(model, y, p, ug, y_c + half)
+        return line_potential(d_lo, d_hi, beta, chi)
+    if model == PAIR:
+        d = y[0] - y[2] - p[P_GAP]
+    else:
+        d = y[0] - ug - p[P_GAP]
+    if d <= 0.0:
+        return 0.0
+    return beta * d ** (chi + 1.0) / (chi + 1.0)
+
+
+@njit(cache=True)
+def contact_forces(model, t, y, p, q_out):
+    """Generalised contact forces ``Q = -dV/dq``.
+
+    ``q_out`` has 6 entries in the order (X_A, Y_A, th_A, X_B, Y_B, th_B);
+    entries a model does not have are set to 0. Returns the resultant
+    compressive force ``-Q_XA`` (units of A_g k_Ax).
+    """
+    ug, _ = ground(t, p)
+    for i in range(6):
+        q_out[i] = 0.0
+    if model == TOWERS:
+        _towers_forces(y, p, q_out)
+    elif model == TOWER_WALL:
+        _tower_wall_forces(y, p, ug, q_out)
+    else:
+        if model == PAIR:
+            d = y[0] - y[2] - p[P_GAP]
+        else:
+            d = y[0] - ug - p[P_GAP]
+        force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+        q_out[0] = -force
+        if model == PAIR:
+            q_out[3] = force
+    return -q_out[0]
+
+
+@njit(cache=True)
+def energy(model, y, p):
+    """Total mechanical energy (MODEL.md section 2), ground motion "none".
+
+    ``E = sum_i (1/mu_i) [(X'^2 + Y'^2 + rho^2 th'^2)/2 + Om^2 (X^2 + Y^2
+    + 2 e_y X th - 2 e_x Y th)/2 + rho^2 Om_t^2 th^2 / 2] + V``.
+    Conserved when all damping ratios are 0 and the ground does not move.
+    """
+    if model == TOWERS:
+        e = _tower_energy(p, TOWER_A, y[0], y[1], y[2], y[3], y[4], y[5])
+        e += _tower_energy(p, TOWER_B, y[6], y[7], y[8], y[9], y[10], y[11])
+    elif model == TOWER_WALL:
+        e = _tower_energy(p, TOWER_A, y[0], y[1], y[2], y[3], y[4], y[5])
+    elif model == PAIR:
+        e = _tower_energy(p, TOWER_A, y[0], y[1], 0.0, 0.0, 0.0, 0.0)
+        e += _tower_energy(p, TOWER_B, y[2], y[3], 0.0, 0.0, 0.0, 0.0)
+    else:
+        e = _tower_energy(p, TOWER_A, y[0], y[1], 0.0, 0.0, 0.0, 0.0)
+    return e + contact_potential(model, 0.0, y, p)
+
+
+@njit(cache=True)
+def jacobian_trace(model, p):
+    """Constant trace of the Jacobian (MODEL.md section 5): sum of all exponents."""
+    tr = -p[TOWER_A + T_CX]
+    if model == TOWERS or model == TOWER_WALL:
+        tr -= p[TOWER_A + T_CY] + p[TOWER_A + T_CT]
+    if model == TOWERS:
+        tr -= p[TOWER_B + T_CX] + p[TOWER_B + T_CY] + p[TOWER_B + T_CT]
+    if model == PAIR:
+        tr -= p[TOWER_B + T_CX]
+    return tr
+
+
+# --------------------------------------------------------------------- helpers
+
+
+@njit(cache=True)
+def _towers_gap(model, y, p, ug, y_at):
+    """Penetration d(y) at global height ``y_at`` (TOWERS or TOWER_WALL)."""
+    y_ca = y[2] + p[TOWER_A + T_EY]
+    if model == TOWERS:
+        y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
+        return y[0] - y[6] - p[P_GAP] - y[4] * (y_at - y_ca) + y[10] * (y_at - y_cb)
+    return y[0] - ug - p[P_GAP] - y[4] * (y_at - y_ca)
+
+
+@njit(cache=True)
+def _towers_forces(y, p, q):
+    """Line-contact forces between the two towers, into q (6 entries)."""
+    th_a = y[4]
+    th_b = y[10]
+    y_c = p[P_Y_C]
+    y_ca = y[2] + p[TOWER_A + T_EY]
+    y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
+    d_c = y[0] - y[6] - p[P_GAP] - th_a * (y_c - y_ca) + th_b * (y_c - y_cb)
+    force, moment, _, _ = line_contact(d_c, th_b - th_a, p[P_HALF_L], p[P_BETA], p[P_CHI])
+    q[0] = -force
+    q[1] = -th_a * force
+    q[2] = moment - (y_ca - y_c) * force
+    q[3] = force
+    q[4] = th_b * force
+    q[5] = -(moment - (y_cb - y_c) * force)
+
+
+@njit(cache=True)
+def _tower_wall_forces(y, p, ug, q):
+    """Line-contact forces between tower A and the ground-borne wall."""
+    th_a = y[4]
+    y_c = p[P_Y_C]
+    y_ca = y[2] + p[TOWER_A + T_EY]
+    d_c = y[0] - ug - p[P_GAP] - th_a * (y_c - y_ca)
+    force, moment, _, _ = line_contact(d_c, -th_a, p[P_HALF_L], p[P_BETA], p[P_CHI])
+    q[0] = -force
+    q[1] = -th_a * force
+    q[2] = moment - (y_ca - y_c) * force
+
+
+@njit(cache=True)
+def _tower_accel(p, base, x, vx, yy, vy, th, vth, ug, vg, qx, qy, qth, out, off):
+    """Equations of motion of one tower (MODEL.md section 2) into out[off:off+6]."""
+    om2 = p[base + T_OM2]
+    mu = p[base + T_MU]
+    ex = p[base + T_EX]
+    ey = p[base + T_EY]
+    xr = x - ug
+    out[off] = vx
+    out[off + 1] = -p[base + T_CX] * (vx - vg) - om2 * (xr + ey * th) + mu * qx
+    out[off + 2] = vy
+    out[off + 3] = -p[base + T_CY] * vy - om2 * (yy - ex * th) + mu * qy
+    out[off + 4] = vth
+    out[off + 5] = (
+        -p[base + T_CT] * vth
+        - p[base + T_KTH] * (ey * xr - ex * yy)
+        - p[base + T_OMT2] * th
+        + mu * qth / p[base + T_RHO2]
+    )
+
+
+@njit(cache=True)
+def _rhs_towers(y, p, ug, vg, out):
+    th_a = y[4]
+    th_b = y[10]
+    y_c = p[P_Y_C]
+    y_ca = y[2] + p[TOWER_A + T_EY]
+    y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
+    d_c = y[0] - y[6] - p[P_GAP] - th_a * (y_c - y_ca) + th_b * (y_c - y_cb)
+    force, moment, _, _ = line_contact(d_c, th_b - th_a, p[P_HALF_L], p[P_BETA], p[P_CHI])
+    q_tha = moment - (y_ca - y_c) * force
+    q_thb = -(moment - (y_cb - y_c) * force)
+    _tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
+                 -force, -th_a * force, q_tha, out, 0)
+    _tower_accel(p, TOWER_B, y[6], y[7], y[8], y[9], th_b, y[11], ug, vg,
+                 force, th_b * force, q_thb, out, 6)
+
+
+@njit(cache=True)
+def _rhs_tower_wall(y, p, ug, vg, out):
+    th_a = y[4]
+    y_c = p[P_Y_C]
+    y_ca = y[2] + p[TOWER_A + T_EY]
+    d_c = y[0] - ug - p[P_GAP] - th_a * (y_c - y_ca)
+    force, moment, _, _ = line_contact(d_c, -th_a, p[P_HALF_L], p[P_BETA], p[P_CHI])
+    _tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
+                 -force, -th_a * force, moment - (y_ca - y_c) * force, out, 0)
+
+
+@njit(cache=True)
+def _rhs_pair(y, p, ug, vg, out):
+    d = y[0] - y[2] - p[P_GAP]
+    force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+    a = TOWER_A
+    b = TOWER_B
+    out[0] = y[1]
+    out[1] = -p[a + T_CX] * (y[1] - vg) - p[a + T_OM2] * (y[0] - ug) - p[a + T_MU] * force
+    out[2] = y[3]
+    out[3] = -p[b + T_CX] * (y[3] - vg) - p[b + T_OM2] * (y[2] - ug) + p[b + T_MU] * force
+
+
+@njit(cache=True)
+def _rhs_wall(y, p, ug, vg, out):
+    d = y[0] - ug - p[P_GAP]
+    force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+    a = TOWER_A
+    out[0] = y[1]
+    out[1] = -p[a + T_CX] * (y[1] - vg) - p[a + T_OM2] * (y[0] - ug) - p[a + T_MU] * force
+
+
+@njit(cache=True)
+def _jac_tower_linear(p, base, off, jac):
+    """Structural (contact-free) part of one tower's Jacobian block."""
+    om2 = p[base + T_OM2]
+    kth = p[base + T_KTH]
+    ex = p[base + T_EX]
+    ey = p[base + T_EY]
+    for k in range(3):
+        jac[off + 2 * k, off + 2 * k + 1] = 1.0
+    jac[off + 1, off + 0] = -om2
+    jac[off + 1, off + 1] = -p[base + T_CX]
+    jac[off + 1, off + 4] = -om2 * ey
+    jac[off + 3, off + 2] = -om2
+    jac[off + 3, off + 3] = -p[base + T_CY]
+    jac[off + 3, off + 4] = om2 * ex
+    jac[off + 5, off + 0] = -kth * ey
+    jac[off + 5, off + 2] = kth * ex
+    jac[off + 5, off + 4] = -p[base + T_OMT2]
+    jac[off + 5, off + 5] = -p[base + T_CT]
+
+
+@njit(cache=True)
+def _jac_contact_towers(y, p, jac):
+    """Contact part of the 12-state Jacobian (product rule on Q(q))."""
+    th_a = y[4]
+    th_b = y[10]
+    y_c = p[P_Y_C]
+    half = p[P_HALF_L]
+    beta = p[P_BETA]
+    chi = p[P_CHI]
+    y_ca = y[2] + p[TOWER_A + T_EY]
+    y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
+    d_c = y[0] - y[6] - p[P_GAP] - th_a * (y_c - y_ca) + th_b * (y_c - y_cb)
+    force, moment, d_lo, d_hi = line_contact(d_c, th_b - th_a, half, beta, chi)
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return
+    g = line_contact_gradient(d_lo, d_hi, half, beta, chi)
+    # derivatives of d_c and slope w.r.t. the 12 states (positions only)
+    cols = (0, 2, 4, 6, 8, 10)
+    ddc = (1.0, th_a, y_ca - y_c, -1.0, -th_b, y_c - y_cb)
+    dsl = (0.0, 0.0, -1.0, 0.0, 0.0, 1.0)
+    mu_a = p[TOWER_A + T_MU]
+    mu_b = p[TOWER_B + T_MU]
+    rho2_a = p[TOWER_A + T_RHO2]
+    rho2_b = p[TOWER_B + T_RHO2]
+    for k in range(6):
+        col = cols[k]
+        dforce = g[0] * ddc[k] + g[1] * dsl[k]
+        dmoment = g[2] * ddc[k] + g[3] * dsl[k]
+        d_qtha = dmoment - (y_ca - y_c) * dforce
+        d_qthb = -dmoment + (y_cb - y_c) * dforce
+        d_qya = -th_a * dforce
+        d_qyb = th_b * dforce
+        if col == 4:
+            d_qya -= force
+        if col == 10:
+            d_qyb += force
+        if col == 2:
+            d_qtha -= force
+        if col == 8:
+            d_qthb += force
+        jac[1, col] += -mu_a * dforce
+        jac[3, col] += mu_a * d_qya
+        jac[5, col] += mu_a * d_qtha / rho2_a
+        jac[7, col] += mu_b * dforce
+        jac[9, col] += mu_b * d_qyb
+        jac[11, col] += mu_b * d_qthb / rho2_b
+
+
+@njit(cache=True)
+def _jac_contact_tower_wall(y, p, ug, jac):
+    th_a = y[4]
+    y_c = p[P_Y_C]
+    half = p[P_HALF_L]
+    beta = p[P_BETA]
+    chi = p[P_CHI]
+    y_ca = y[2] + p[TOWER_A + T_EY]
+    d_c = y[0] - ug - p[P_GAP] - th_a * (y_c - y_ca)
+    force, moment, d_lo, d_hi = line_contact(d_c, -th_a, half, beta, chi)
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return
+    g = line_contact_gradient(d_lo, d_hi, half, beta, chi)
+    cols = (0, 2, 4)
+    ddc = (1.0, th_a, y_ca - y_c)
+    dsl = (0.0, 0.0, -1.0)
+    mu_a = p[TOWER_A + T_MU]
+    rho2_a = p[TOWER_A + T_RHO2]
+    for k in range(3):
+        col = cols[k]
+        dforce = g[0] * ddc[k] + g[1] * dsl[k]
+        dmoment = g[2] * ddc[k] + g[3] * dsl[k]
+        d_qtha = dmoment - (y_ca - y_c) * dforce
+        d_qya = -th_a * dforce
+        if col == 4:
+            d_qya -= force
+        if col == 2:
+            d_qtha -= force
+        jac[1, col] += -mu_a * dforce
+        jac[3, col] += mu_a * d_qya
+        jac[5, col] += mu_a * d_qtha / rho2_a
+
+
+@njit(cache=True)
+def _jac_pair(y, p, jac):
+    a = TOWER_A
+    b = TOWER_B
+    d = y[0] - y[2] - p[P_GAP]
+    stiff = p[P_BETA] * p[P_CHI] * d ** (p[P_CHI] - 1.0) if d > 0.0 else 0.0
+    jac[0, 1] = 1.0
+    jac[1, 0] = -p[a + T_OM2] - p[a + T_MU] * stiff
+    jac[1, 1] = -p[a + T_CX]
+    jac[1, 2] = p[a + T_MU] * stiff
+    jac[2, 3] = 1.0
+    jac[3, 2] = -p[b + T_OM2] - p[b + T_MU] * stiff
+    jac[3, 3] = -p[b + T_CX]
+    jac[3, 0] = p[b + T_MU] * stiff
+
+
+@njit(cache=True)
+def _jac_wall(y, p, ug, jac):
+    a = TOWER_A
+    d = y[0] - ug - p[P_GAP]
+    stiff = p[P_BETA] * p[P_CHI] * d ** (p[P_CHI] - 1.0) if d > 0.0 else 0.0
+    jac[0, 1] = 1.0
+    jac[1, 0] = -p[a + T_OM2] - p[a + T_MU] * stiff
+    jac[1, 1] = -p[a + T_CX]
+
+
+@njit(cache=True)
+def _tower_energy(p, base, x, vx, yy, vy, th, vth):
+    rho2 = p[base + T_RHO2]
+    om2 = p[base + T_OM2]
+    kinetic = 0.5 * (vx * vx + vy * vy + rho2 * vth * vth)
+    structural = 0.5 * om2 * (
+        x * x + yy * yy + 2.0 * p[base + T_EY] * x * th - 2.0 * p[base + T_EX] * yy * th
+    ) + 0.5 * rho2 * p[base + T_OMT2] * th * th
+    return (kinetic + structural) / p[base + T_MU]
