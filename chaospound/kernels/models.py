@@ -50,7 +50,6 @@ from .params import (
     TOWER_B,
     TOWER_WALL,
     TOWERS,
-    WALL,
 )
 
 

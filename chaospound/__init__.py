@@ -1,0 +1,33 @@
+"""chaospound: chaotic seismic torsional pounding between two single-storey towers.
+
+The scene API is exported lazily, so that ``import chaospound`` stays light
+(no numpy or numba until a name is used).
+"""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"
+
+_SCENE_EXPORTS = (
+    "Contact",
+    "Excitation",
+    "Run",
+    "Scene",
+    "SceneError",
+    "Solver",
+    "Tower",
+    "list_presets",
+    "load_preset",
+    "load_scene",
+    "save_scene",
+)
+
+__all__ = ["__version__", *_SCENE_EXPORTS]
+
+
+def __getattr__(name: str) -> object:
+    if name in _SCENE_EXPORTS:
+        from chaospound import scene
+
+        return getattr(scene, name)
+    raise AttributeError(f"module 'chaospound' has no attribute {name!r}")
