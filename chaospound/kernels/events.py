@@ -1,0 +1,72 @@
+"""Contact events located on the dense output of a step (MODEL.md section 3).
+
+The event functions are the penetrations at the two ends of the contact line,
+``d_lo(t)`` and ``d_hi(t)``; their sign changes are the force's kinks (contact
+onset and release of an end). Inside one step the state is the step's
+interpolant ``y(t + theta h)``; roots in theta are refined by the Illinois
+variant of regula falsi, safeguarded by bisection, to :data:`TIME_TOL` in time.
+
+Grazes (an end that approaches, touches and leaves inside one step, with no
+sign change at the step ends) are found from the rates: a rate that turns
+towards zero inside the step marks an extremum, which is located as a root of
+the rate, and the penetration there decides whether two crossings happened.
+"""
+
+from numba import njit
+
+from .models import contact_ends
+from .rk import dense_eval
+
+TIME_TOL = 1e-13  #: absolute tolerance of located event times (normalised time)
+MAX_ITER = 200  #: iteration cap of the root finders (bisection halves 2^-200)
+
+
+@njit(cache=True)
+def end_value(model, method, q, y, t, h, theta, p, which, work, ends):
+    """``which`` = 0, 1: penetration d_lo, d_hi; 2, 3: their rates, at t + theta h."""
+    dense_eval(method, q, y, h, theta, work)
+    contact_ends(model, t + theta * h, work, p, ends)
+    return ends[which]
+
+
+@njit(cache=True)
+def locate_root(model, method, q, y, t, h, p, which, lo, f_lo, hi, f_hi, work, ends):
+    """Root in theta of end quantity ``which`` on [lo, hi] where the signs differ.
+
+    ``f_lo`` and ``f_hi`` are the (possibly conventional) values at the bracket
+    ends; they must have opposite signs. Returns theta of the root, refined
+    until the bracket is shorter than TIME_TOL in time.
+    """
+    theta_tol = TIME_TOL / h if h > 0.0 else 1e-15
+    side = 0
+    for _ in range(MAX_ITER):
+        if hi - lo <= theta_tol:
+            break
+        # Illinois step, falling back to bisection when it stalls at an end
+        mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+        if not (lo < mid < hi) or (mid - lo) < 0.25 * theta_tol or (hi - mid) < 0.25 * theta_tol:
+            mid = 0.5 * (lo + hi)
+        f_mid = end_value(model, method, q, y, t, h, mid, p, which, work, ends)
+        if f_mid == 0.0:
+            return mid
+        if (f_mid > 0.0) == (f_hi > 0.0):
+            hi = mid
+            f_hi = f_mid
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+        else:
+            lo = mid
+            f_lo = f_mid
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+    # the root lies in [lo, hi]; the upper end is on the far side of zero
+    return hi
+
+
+@njit(cache=True)
+def locate_extremum(model, method, q, y, t, h, p, end, rate_lo, rate_hi, work, ends):
+    """theta where the rate of end ``end`` (0 or 1) vanishes inside the step."""
+    return locate_root(model, method, q, y, t, h, p, end + 2, 0.0, rate_lo, 1.0, rate_hi,
+                       work, ends)

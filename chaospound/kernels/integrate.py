@@ -1,0 +1,519 @@
+"""Cycle-by-cycle integration with located contact events (MODEL.md sections 3, 5).
+
+Time is kept as (cycle index k, local time tau): ``t = t0 + k T + tau`` with
+``t0`` the stroboscopic section's time origin and ``tau`` reset to exactly 0
+at every section, so the forcing phase ``(t0 + tau) / r`` never accumulates
+round-off, however long the run. Steps end exactly on every section.
+
+Contact events are the sign changes of the end penetrations d_lo, d_hi
+(:mod:`chaospound.kernels.events`). With ``restart`` on, a step that contains
+one is redone so that it ends exactly on the earliest event (the force is
+only once or twice differentiable there and an embedded error estimate does
+not see the kink); the rest of the step is then integrated afresh.
+
+Impacts (onsets of contact episodes, ``d_max = max(d_lo, d_hi)`` crossing 0
+upwards) whose onset lies in the record window ``[t0 + k_record T,
+t0 + k_end T)`` are recorded with their state; an episode still running at the
+end of the window is followed to its release for its peak and duration.
+"""
+
+import numpy as np
+from numba import njit
+
+from .events import end_value, locate_extremum, locate_root
+from .models import contact_ends, contact_forces, penetration_rate, rhs
+from .params import (
+    MODEL_DIMS,
+    P_HALF_L,
+    P_PERIOD,
+    P_PHASE0,
+    P_Y_C,
+    P_Y_OFF,
+    T_EX,
+    T_L,
+    T_W,
+    TOWER_A,
+    TOWER_B,
+    TOWER_WALL,
+    TOWERS,
+)
+from .rk import (
+    DENSE_EVALS,
+    MAX_DENSE,
+    MAX_STAGES,
+    NEW_EVALS,
+    RK4,
+    dense_eval,
+    dense_prepare,
+    initial_step,
+    rk_step,
+    step_factor,
+)
+
+# ------------------------------------------------------------- impact table
+IMP_TIME = 0  #: onset time t (normalised)
+IMP_PHASE = 1  #: (t mod T) / T in [0, 1)
+IMP_VELOCITY = 2  #: relative impact velocity V (units of A_g omega_Ax)
+IMP_CORNER = 3  #: corner code, see CORNER_LABELS
+IMP_PEAK_PEN = 4  #: peak penetration of the episode (max of d_max)
+IMP_PEAK_FORCE = 5  #: peak resultant contact force on A along -x
+IMP_DURATION = 6  #: episode duration (until d_max falls back through 0)
+IMP_CYCLE = 7  #: excitation cycle index k of the onset
+IMP_Y = 8  #: global y of the contact point
+N_IMP_FIELDS = 9
+
+CORNER_FACE = 0
+CORNER_A_PLUS = 1
+CORNER_A_MINUS = 2
+CORNER_B_PLUS = 3
+CORNER_B_MINUS = 4
+CORNER_LABELS = ("face", "A+", "A-", "B+", "B-")
+FACE_TOL = 1e-9  #: |d_lo - d_hi| < FACE_TOL max(1, |d_max|): a "face" impact
+
+# ------------------------------------------------------------ run statistics
+ST_ACCEPTED = 0
+ST_REJECTED = 1
+ST_RHS_EVALS = 2
+ST_IMPACTS = 3
+ST_EVENTS = 4
+ST_STATUS = 5
+N_STATS = 6
+
+STATUS_OK = 0
+STATUS_MAX_STEPS = 1  #: the step budget ran out
+STATUS_OVERFLOW = 2  #: the impact table is full (caller enlarges and reruns)
+STATUS_STEP_UNDERFLOW = 3  #: the step size fell below round-off (stiffness, NaN)
+STATUS_NONFINITE = 4  #: the state became NaN or infinite
+
+MERGE_TOL = 1e-10  #: events closer than this in time are handled together
+MAX_EVENTS = 4  #: per step: two ends, each with at most two crossings
+
+
+@njit(cache=True)
+def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps,
+               restart, n_samples, strobe, traj, imp, imp_state, stats):
+    """Integrate from ``clock`` to the section ``k_end``, recording the window.
+
+    Parameters
+    ----------
+    model, method : int
+        Model id (params) and Runge-Kutta method id (rk).
+    p : ndarray
+        Packed parameters.
+    y : ndarray (n,)
+        State at the start; overwritten with the final state.
+    clock : ndarray (3,)
+        ``[k, tau, h]`` at the start (cycle index, local time, step size; h <= 0
+        selects the initial step automatically); overwritten at the end.
+    k_record, k_end : int
+        Section indices bounding the record window.
+    rtol, atol, h_fixed : float
+        Tolerances (adaptive methods) and the fixed step (RK4).
+    max_steps : int
+        Budget of attempted steps.
+    restart : bool
+        End steps exactly at contact kinks.
+    n_samples : int
+        Dense trajectory samples per cycle in the record window (0: none);
+        ``traj`` has shape (n_samples (k_end - k_record) + 1, n + 1), column 0
+        holding the time.
+    strobe : ndarray (k_end - k_record + 1, n)
+        Stroboscopic states at the sections k_record .. k_end.
+    imp, imp_state : ndarray
+        Impact table (capacity, N_IMP_FIELDS) and states at onset (capacity, n).
+    stats : ndarray of int64 (N_STATS,)
+        Counters, see ST_*; ``stats[ST_STATUS]`` is the exit status.
+
+    Returns
+    -------
+    int
+        Number of impacts recorded.
+    """
+    n = MODEL_DIMS[model]
+    period = p[P_PERIOD]
+    t0 = p[P_PHASE0]
+    capacity = imp.shape[0]
+    two_ends = model == TOWERS or model == TOWER_WALL
+
+    # workspaces (allocated once)
+    f0 = np.empty(n)
+    f_new = np.empty(n)
+    y_new = np.empty(n)
+    stage = np.empty((MAX_STAGES, n))
+    dense = np.empty((MAX_DENSE, n))
+    work = np.empty(n)
+    work2 = np.empty(n)
+    ends_old = np.empty(4)
+    ends_new = np.empty(4)
+    ends_tmp = np.empty(4)
+    forces = np.empty(6)
+    ev_theta = np.empty(MAX_EVENTS)
+    ev_end = np.empty(MAX_EVENTS, dtype=np.int64)
+
+    k = int(clock[0])
+    tau = clock[1]
+    h = clock[2]
+    for i in range(N_STATS):
+        stats[i] = 0
+
+    rhs(model, t0 + tau, y, p, f0)
+    stats[ST_RHS_EVALS] += 1
+    if method == RK4:
+        h = h_fixed
+    elif h <= 0.0:
+        h = initial_step(method, model, t0 + tau, y, f0, p, rtol, atol, work, work2)
+        stats[ST_RHS_EVALS] += 1
+
+    contact_ends(model, t0 + tau, y, p, ends_old)
+    inside_lo = ends_old[0] > 0.0
+    inside_hi = ends_old[1] > 0.0 if two_ends else inside_lo
+    active = inside_lo or inside_hi
+    episode = -1  # row of the impact whose episode is running, -1 if none recorded
+    n_imp = 0
+    n_traj = 0
+    err_prev = 1e-4
+    rejected_last = False
+    record_done = k >= k_end
+    at_section = tau == 0.0
+    seg_end = 0.0 if tau < 0.0 else period
+    status = STATUS_OK
+    attempts = 0
+
+    while True:
+        if at_section:
+            at_section = False
+            if k_record <= k <= k_end:
+                row = k - k_record
+                for i in range(n):
+                    strobe[row, i] = y[i]
+                if n_samples > 0 and n_traj < traj.shape[0]:
+                    _store_sample(traj, n_traj, t0 + k * period, y, n)
+                    n_traj += 1
+            if k >= k_end:
+                record_done = True
+            seg_end = period
+        if record_done and not active:
+            break
+        if attempts >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        attempts += 1
+
+        # ---- attempt one step, truncated at the segment end
+        h_prop = h
+        h_try = h
+        to_end = seg_end - tau
+        reaches_end = False
+        if h_try >= to_end or to_end - h_try < 1e-12 * max(1.0, period):
+            h_try = to_end
+            reaches_end = True
+        t_here = t0 + tau
+        err = rk_step(method, model, t_here, h_try, y, f0, p, rtol, atol, stage, y_new, f_new)
+        stats[ST_RHS_EVALS] += NEW_EVALS[method]
+        if not np.isfinite(err) or not _all_finite(y_new, n):
+            if method == RK4 or h_try < 1e-14 * max(1.0, period):
+                status = STATUS_NONFINITE
+                break
+            stats[ST_REJECTED] += 1
+            h = 0.25 * h_try
+            rejected_last = True
+            continue
+        if method != RK4 and err > 1.0:
+            stats[ST_REJECTED] += 1
+            h = h_try * min(1.0, step_factor(method, err, err_prev))
+            rejected_last = True
+            if h < 1e-14 * max(1.0, period):
+                status = STATUS_STEP_UNDERFLOW
+                break
+            continue
+
+        # ---- events inside the accepted step
+        contact_ends(model, t_here + h_try, y_new, p, ends_new)
+        n_ev = 0
+        dense_ready = False
+        for end in range(2 if two_ends else 1):
+            inside = inside_lo if end == 0 else inside_hi
+            d_new = ends_new[end]
+            rate_old = ends_old[end + 2]
+            rate_new = ends_new[end + 2]
+            crossing = (d_new > 0.0) != inside
+            turning = (not inside and rate_old > 0.0 and rate_new < 0.0) or (
+                inside and rate_old < 0.0 and rate_new > 0.0)
+            if not crossing and not turning:
+                continue
+            if not dense_ready:
+                dense_prepare(method, model, t_here, h_try, y, f0, y_new, f_new, p, stage, dense)
+                stats[ST_RHS_EVALS] += DENSE_EVALS[method]
+                dense_ready = True
+            s_old = 1.0 if inside else -1.0  # conventional sign at theta = 0
+            if crossing:
+                theta = locate_root(model, method, dense, y, t_here, h_try, p, end, 0.0,
+                                    s_old * 1e-300, 1.0, d_new, work, ends_tmp)
+                ev_theta[n_ev] = theta
+                ev_end[n_ev] = end
+                n_ev += 1
+            else:
+                theta_m = locate_extremum(model, method, dense, y, t_here, h_try, p, end,
+                                          rate_old, rate_new, work, ends_tmp)
+                d_m = end_value(model, method, dense, y, t_here, h_try, theta_m, p, end,
+                                work, ends_tmp)
+                if (d_m > 0.0) != inside:  # two crossings inside the step
+                    theta = locate_root(model, method, dense, y, t_here, h_try, p, end, 0.0,
+                                        s_old * 1e-300, theta_m, d_m, work, ends_tmp)
+                    ev_theta[n_ev] = theta
+                    ev_end[n_ev] = end
+                    n_ev += 1
+                    theta2 = locate_root(model, method, dense, y, t_here, h_try, p, end,
+                                         theta_m, d_m, 1.0, -d_m, work, ends_tmp)
+                    ev_theta[n_ev] = theta2
+                    ev_end[n_ev] = end
+                    n_ev += 1
+
+        truncated_to_event = False
+        if n_ev > 0:
+            _sort_events(ev_theta, ev_end, n_ev)
+            stats[ST_EVENTS] += 1
+            first = ev_theta[0]
+            if restart and first * h_try > MERGE_TOL and (1.0 - first) * h_try > MERGE_TOL:
+                # redo the step so that it ends on the earliest event
+                h_ev = first * h_try
+                err2 = rk_step(method, model, t_here, h_ev, y, f0, p, rtol, atol, stage, y_new,
+                               f_new)
+                stats[ST_RHS_EVALS] += NEW_EVALS[method]
+                if not np.isfinite(err2) or (method != RK4 and err2 > 1.0):
+                    stats[ST_REJECTED] += 1
+                    h = h_ev
+                    rejected_last = True
+                    continue
+                contact_ends(model, t_here + h_ev, y_new, p, ends_new)
+                # keep the events that coincide with the first one, at theta = 1
+                m = 0
+                for i in range(n_ev):
+                    if (ev_theta[i] - first) * h_try <= MERGE_TOL:
+                        ev_theta[m] = 1.0
+                        ev_end[m] = ev_end[i]
+                        m += 1
+                n_ev = m
+                h_try = h_ev
+                dense_ready = False
+                truncated_to_event = True
+                reaches_end = False
+
+        # ---- accept
+        sampling = n_samples > 0 and (not record_done) and k >= k_record and tau >= 0.0
+        if sampling and not dense_ready:
+            dense_prepare(method, model, t_here, h_try, y, f0, y_new, f_new, p, stage, dense)
+            stats[ST_RHS_EVALS] += DENSE_EVALS[method]
+            dense_ready = True
+        if sampling:
+            n_traj = _store_samples(method, dense, y, t0, k, period, tau, h_try, n_samples,
+                                    traj, n_traj, work, n)
+
+        # process the events in time order (interpolated states when not landed)
+        for i in range(n_ev):
+            theta = ev_theta[i]
+            end = ev_end[i]
+            if theta >= 1.0:
+                t_ev = t_here + h_try
+                for j in range(n):
+                    work[j] = y_new[j]
+            else:
+                t_ev = t_here + theta * h_try
+                end_value(model, method, dense, y, t_here, h_try, theta, p, 0, work, ends_tmp)
+            if end == 0:
+                inside_lo = not inside_lo
+                if not two_ends:
+                    inside_hi = inside_lo
+            else:
+                inside_hi = not inside_hi
+            now_active = inside_lo or inside_hi
+            if now_active and not active:
+                # onset of an episode
+                if not record_done and k >= k_record:
+                    if n_imp >= capacity:
+                        status = STATUS_OVERFLOW
+                        break
+                    _record_onset(model, p, t_ev, k, period, t0, work, imp, imp_state, n_imp, n,
+                                  ends_tmp)
+                    episode = n_imp
+                    n_imp += 1
+                else:
+                    episode = -1
+            elif active and not now_active:
+                if episode >= 0:
+                    imp[episode, IMP_DURATION] = t_ev + k * period - imp[episode, IMP_TIME]
+                episode = -1
+            active = now_active
+        if status != STATUS_OK:
+            break
+
+        # peak penetration and force of the running episode
+        if episode >= 0 and active:
+            _update_peak(model, method, dense, dense_ready, y, y_new, t_here, h_try, p, ends_old,
+                         ends_new, imp, episode, work, ends_tmp, forces, two_ends)
+
+        stats[ST_ACCEPTED] += 1
+        tau += h_try
+        for i in range(n):
+            y[i] = y_new[i]
+            f0[i] = f_new[i]
+        for i in range(4):
+            ends_old[i] = ends_new[i]
+
+        # ---- next step size
+        if method == RK4:
+            h = h_fixed
+        else:
+            fac = step_factor(method, err, err_prev)
+            if rejected_last:
+                fac = min(fac, 1.0)
+            err_prev = max(err, 1e-4)
+            h_next = h_prop * fac
+            if not truncated_to_event and h_try < h_prop:
+                h_next = max(h_try * fac, h_prop)
+            h = h_next
+        rejected_last = False
+
+        # ---- section reached
+        if reaches_end:
+            if seg_end == period:
+                k += 1
+            tau = 0.0
+            at_section = True
+            rhs(model, t0, y, p, f0)
+            stats[ST_RHS_EVALS] += 1
+            contact_ends(model, t0, y, p, ends_old)
+
+    clock[0] = k
+    clock[1] = tau
+    clock[2] = h
+    stats[ST_IMPACTS] = n_imp
+    stats[ST_STATUS] = status
+    return n_imp
+
+
+@njit(cache=True)
+def _all_finite(v, n):
+    for i in range(n):
+        if not np.isfinite(v[i]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _sort_events(theta, end, n_ev):
+    """Insertion sort of the (few) events of a step by theta."""
+    for i in range(1, n_ev):
+        th = theta[i]
+        en = end[i]
+        j = i - 1
+        while j >= 0 and theta[j] > th:
+            theta[j + 1] = theta[j]
+            end[j + 1] = end[j]
+            j -= 1
+        theta[j + 1] = th
+        end[j + 1] = en
+
+
+@njit(cache=True)
+def _record_onset(model, p, t_force, k, period, t0, state, imp, imp_state, row, n, ends):
+    """Fill one impact row at onset: time, phase, velocity, corner, state."""
+    contact_ends(model, t_force, state, p, ends)
+    d_lo = ends[0]
+    d_hi = ends[1]
+    d_max = max(d_lo, d_hi)
+    if model == TOWERS or model == TOWER_WALL:
+        y_c = p[P_Y_C]
+        half = p[P_HALF_L]
+        if abs(d_lo - d_hi) < FACE_TOL * max(1.0, abs(d_max)):
+            corner = CORNER_FACE
+            y_at = y_c
+        elif d_hi > d_lo:
+            y_at = y_c + half
+            corner = _corner_label(model, p, state, True)
+        else:
+            y_at = y_c - half
+            corner = _corner_label(model, p, state, False)
+        velocity = penetration_rate(model, t_force, state, p, y_at)
+    else:
+        corner = CORNER_FACE
+        y_at = 0.0
+        velocity = ends[2]
+    x = t_force / period
+    if x >= 1.0:
+        x -= 1.0
+    imp[row, IMP_TIME] = t_force + k * period
+    imp[row, IMP_PHASE] = x
+    imp[row, IMP_VELOCITY] = velocity
+    imp[row, IMP_CORNER] = corner
+    imp[row, IMP_PEAK_PEN] = max(d_max, 0.0)
+    imp[row, IMP_PEAK_FORCE] = 0.0
+    imp[row, IMP_DURATION] = np.nan
+    imp[row, IMP_CYCLE] = k
+    imp[row, IMP_Y] = y_at
+    for i in range(n):
+        imp_state[row, i] = state[i]
+
+
+@njit(cache=True)
+def _corner_label(model, p, s, plus_end):
+    """Whose corner is the inner one at the + (y_hi) or - (y_lo) end (MODEL.md 3)."""
+    if model == TOWER_WALL:
+        return CORNER_A_PLUS if plus_end else CORNER_A_MINUS
+    a = TOWER_A
+    b = TOWER_B
+    sign = 1.0 if plus_end else -1.0
+    h_a = s[2] + sign * 0.5 * p[a + T_L] + s[4] * (0.5 * p[a + T_W] - p[a + T_EX])
+    h_b = s[8] + p[P_Y_OFF] + sign * 0.5 * p[b + T_L] - s[10] * (0.5 * p[b + T_W] + p[b + T_EX])
+    if plus_end:
+        return CORNER_A_PLUS if h_a <= h_b else CORNER_B_PLUS
+    return CORNER_A_MINUS if h_a >= h_b else CORNER_B_MINUS
+
+
+@njit(cache=True)
+def _update_peak(model, method, dense, dense_ready, y, y_new, t, h, p, ends_old, ends_new, imp,
+                 row, work, ends_tmp, forces, two_ends):
+    """Raise the episode's peak penetration and force with this step's maxima."""
+    pen = max(ends_new[0], ends_new[1])
+    if pen > imp[row, IMP_PEAK_PEN]:
+        imp[row, IMP_PEAK_PEN] = pen
+    force = contact_forces(model, t + h, y_new, p, forces)
+    if force > imp[row, IMP_PEAK_FORCE]:
+        imp[row, IMP_PEAK_FORCE] = force
+    for end in range(2 if two_ends else 1):
+        if ends_old[end + 2] > 0.0 and ends_new[end + 2] < 0.0 and (
+                ends_old[end] > 0.0 or ends_new[end] > 0.0):
+            if not dense_ready:
+                return  # no interpolant (the step was landed on an event): ends only
+            theta = locate_extremum(model, method, dense, y, t, h, p, end, ends_old[end + 2],
+                                    ends_new[end + 2], work, ends_tmp)
+            d_m = end_value(model, method, dense, y, t, h, theta, p, end, work, ends_tmp)
+            if d_m > imp[row, IMP_PEAK_PEN]:
+                imp[row, IMP_PEAK_PEN] = d_m
+            f_m = contact_forces(model, t + theta * h, work, p, forces)
+            if f_m > imp[row, IMP_PEAK_FORCE]:
+                imp[row, IMP_PEAK_FORCE] = f_m
+
+
+@njit(cache=True)
+def _store_sample(traj, row, t, state, n):
+    traj[row, 0] = t
+    for i in range(n):
+        traj[row, i + 1] = state[i]
+
+
+@njit(cache=True)
+def _store_samples(method, dense, y, t0, k, period, tau, h, n_samples, traj, n_traj, work, n):
+    """Interpolated samples on the grid tau = j T / n_samples, 0 < j < n_samples, in (tau, tau + h].
+
+    The sample at tau = 0 is the section state, stored at the section.
+    """
+    dt = period / n_samples
+    j = int(np.floor(tau / dt)) + 1
+    while j < n_samples and j * dt <= tau + h and n_traj < traj.shape[0]:
+        theta = min((j * dt - tau) / h, 1.0)
+        dense_eval(method, dense, y, h, theta, work)
+        _store_sample(traj, n_traj, t0 + k * period + j * dt, work, n)
+        n_traj += 1
+        j += 1
+    return n_traj

@@ -1,0 +1,324 @@
+"""Steady-state runs: transient, record window, impacts, stroboscopic section.
+
+The driver packs a :class:`~chaospound.scene.Scene`, picks the smallest exact
+model (MODEL.md section 4), runs the jitted cycle integrator
+(:func:`chaospound.kernels.integrate.run_cycles`) and returns plain arrays in
+dataclasses. Nothing here knows about files, plots or the command line.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .kernels import integrate as kin
+from .kernels.params import MODEL_DIMS, MODEL_NAMES
+from .kernels.rk import METHOD_NAMES
+from .scene import STATE_NAMES, Scene
+
+__all__ = [
+    "Impacts",
+    "RunStats",
+    "Simulation",
+    "SimulationError",
+    "Strobe",
+    "Trajectory",
+    "simulate",
+]
+
+CORNER_LABELS = kin.CORNER_LABELS
+
+
+class SimulationError(RuntimeError):
+    """A run that could not finish (step budget, step-size underflow, NaN)."""
+
+
+@dataclass(frozen=True)
+class Impacts:
+    """Impacts whose onset lies in the record window, one row each.
+
+    Attributes
+    ----------
+    time : ndarray
+        Onset times t (normalised time, t = tau omega_Ax).
+    phase : ndarray
+        ``(t mod T) / T`` in [0, 1).
+    velocity : ndarray
+        Relative impact velocity V (units of A_g omega_Ax), the rate of
+        penetration at the contact point at onset.
+    corner : ndarray of int
+        Corner codes, see :data:`CORNER_LABELS` ("face", "A+", "A-", "B+", "B-").
+    contact_y : ndarray
+        Global y of the contact point (units of A_g).
+    peak_penetration, peak_force, duration : ndarray
+        Per contact episode: max of d_max (A_g), max of the resultant force on
+        A along -x (A_g k_Ax), and the time until d_max falls back through 0.
+    cycle : ndarray of int
+        Excitation cycle index k of each onset.
+    state : ndarray (n_impacts, n)
+        Full model state at each onset.
+    """
+
+    time: np.ndarray
+    phase: np.ndarray
+    velocity: np.ndarray
+    corner: np.ndarray
+    contact_y: np.ndarray
+    peak_penetration: np.ndarray
+    peak_force: np.ndarray
+    duration: np.ndarray
+    cycle: np.ndarray
+    state: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.time.shape[0])
+
+    @property
+    def labels(self) -> list[str]:
+        """Corner labels as strings."""
+        return [CORNER_LABELS[int(c)] for c in self.corner]
+
+
+@dataclass(frozen=True)
+class Strobe:
+    """Stroboscopic Poincare section: states at t = t0 + k T, k = k_first .. k_last."""
+
+    cycle: np.ndarray
+    time: np.ndarray
+    state: np.ndarray
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Dense samples of the record window (interpolated on the steps' dense output)."""
+
+    time: np.ndarray
+    state: np.ndarray
+
+
+@dataclass(frozen=True)
+class RunStats:
+    """Work done by one run."""
+
+    steps: int
+    rejected: int
+    rhs_evals: int
+    events: int
+    wall_s: float
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """Result of :func:`simulate`.
+
+    Attributes
+    ----------
+    scene : Scene
+        The scene as run.
+    model : str
+        The reduction that ran ("wall", "tower-wall", "pair" or "towers").
+    state_names : tuple of str
+        Names of the state components, in order.
+    impacts, strobe : Impacts, Strobe
+    trajectory : Trajectory or None
+        Present when samples were requested.
+    stats : RunStats
+    final_state : ndarray
+        State at the end of the run (the last section, or the end of the last
+        contact episode when one was running at the end of the window).
+    """
+
+    scene: Scene
+    model: str
+    state_names: tuple[str, ...]
+    impacts: Impacts
+    strobe: Strobe
+    trajectory: Trajectory | None
+    stats: RunStats
+    final_state: np.ndarray
+    transient: int = field(default=0)
+    record: int = field(default=0)
+
+    @property
+    def period(self) -> float:
+        return self.scene.period
+
+    def to_json_dict(self) -> dict:
+        """JSON-ready summary (the ``--json`` output of ``chaospound simulate``)."""
+        imp = self.impacts
+        return {
+            "model": self.model,
+            "scene": self.scene.to_dict(),
+            "state_names": list(self.state_names),
+            "transient_cycles": self.transient,
+            "record_cycles": self.record,
+            "impacts": [
+                {
+                    "time": float(imp.time[i]),
+                    "phase": float(imp.phase[i]),
+                    "velocity": float(imp.velocity[i]),
+                    "corner": CORNER_LABELS[int(imp.corner[i])],
+                    "cycle": int(imp.cycle[i]),
+                    "contact_y": float(imp.contact_y[i]),
+                    "peak_penetration": float(imp.peak_penetration[i]),
+                    "peak_force": float(imp.peak_force[i]),
+                    "duration": float(imp.duration[i]),
+                    "state": imp.state[i].tolist(),
+                }
+                for i in range(len(imp))
+            ],
+            "strobe": self.strobe.state.tolist(),
+            "strobe_cycles": self.strobe.cycle.tolist(),
+            "final_state": self.final_state.tolist(),
+            "stats": {
+                "steps": self.stats.steps,
+                "rejected": self.stats.rejected,
+                "rhs_evals": self.stats.rhs_evals,
+                "events": self.stats.events,
+                "wall_s": self.stats.wall_s,
+            },
+        }
+
+
+def simulate(
+    scene: Scene,
+    *,
+    transient: int | None = None,
+    record: int | None = None,
+    samples_per_cycle: int = 0,
+    initial_state: np.ndarray | None = None,
+    start_at_section: bool = False,
+    impact_capacity: int | None = None,
+) -> Simulation:
+    """Run a scene to steady state and record impacts and the stroboscopic section.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene, with its solver and run settings.
+    transient, record : int, optional
+        Cycles discarded and recorded; default the scene's ``run`` settings
+        (paper: 40 + 8).
+    samples_per_cycle : int
+        Dense trajectory samples per excitation cycle over the record window
+        (0: none). Use a few hundred for phase diagrams.
+    initial_state : ndarray, optional
+        State in the model's order (``Simulation.state_names``) replacing the
+        scene's initial state, e.g. the final state of a neighbouring point.
+    start_at_section : bool
+        Start at the section time t0 = phase T instead of t = 0 (continuation
+        from a stroboscopic state).
+    impact_capacity : int, optional
+        Initial size of the impact table (grown automatically).
+
+    Returns
+    -------
+    Simulation
+
+    Raises
+    ------
+    SimulationError
+        When the step budget runs out, the step size underflows or the state
+        becomes non-finite; the message carries the numbers.
+    """
+    transient = scene.run.transient if transient is None else int(transient)
+    record = scene.run.record if record is None else int(record)
+    if transient < 0 or record < 1:
+        raise ValueError(f"transient = {transient}, record = {record}: need >= 0 and >= 1")
+    model_id = scene.model_id()
+    n = MODEL_DIMS[model_id]
+    p = scene.pack(model_id)
+    if initial_state is None:
+        y_start = scene.initial_vector(model_id)
+    else:
+        y_start = np.asarray(initial_state, dtype=np.float64).copy()
+        if y_start.shape != (n,) or not np.all(np.isfinite(y_start)):
+            raise ValueError(
+                f"initial_state has shape {y_start.shape}: need {n} finite values "
+                f"({', '.join(STATE_NAMES[model_id])})"
+            )
+    solver = scene.solver
+    method = METHOD_NAMES.index(solver.method)
+    period = scene.period
+    t0 = scene.run.phase * period
+    tau_start = 0.0 if (start_at_section or t0 == 0.0) else -t0
+    h_fixed = period / solver.steps_per_cycle
+    capacity = impact_capacity or max(64, 16 * (record + 1))
+    n_rows_traj = samples_per_cycle * record + 1 if samples_per_cycle > 0 else 1
+
+    start = time.perf_counter()
+    while True:
+        y = y_start.copy()
+        clock = np.array([0.0, tau_start, 0.0])
+        strobe = np.full((record + 1, n), np.nan)
+        traj = np.full((n_rows_traj, n + 1), np.nan)
+        imp = np.zeros((capacity, kin.N_IMP_FIELDS))
+        imp_state = np.zeros((capacity, n))
+        stats = np.zeros(kin.N_STATS, dtype=np.int64)
+        n_imp = kin.run_cycles(
+            model_id, method, p, y, clock, transient, transient + record,
+            solver.rtol, solver.atol, h_fixed, solver.max_steps, solver.restart_at_kinks,
+            samples_per_cycle, strobe, traj, imp, imp_state, stats,
+        )
+        status = int(stats[kin.ST_STATUS])
+        if status != kin.STATUS_OVERFLOW:
+            break
+        capacity *= 4
+    wall = time.perf_counter() - start
+    _raise_on_failure(status, stats, clock, period, solver.max_steps, y)
+
+    rows = imp[:n_imp]
+    impacts = Impacts(
+        time=rows[:, kin.IMP_TIME].copy(),
+        phase=rows[:, kin.IMP_PHASE].copy(),
+        velocity=rows[:, kin.IMP_VELOCITY].copy(),
+        corner=rows[:, kin.IMP_CORNER].astype(np.int8),
+        contact_y=rows[:, kin.IMP_Y].copy(),
+        peak_penetration=rows[:, kin.IMP_PEAK_PEN].copy(),
+        peak_force=rows[:, kin.IMP_PEAK_FORCE].copy(),
+        duration=rows[:, kin.IMP_DURATION].copy(),
+        cycle=rows[:, kin.IMP_CYCLE].astype(np.int64),
+        state=imp_state[:n_imp].copy(),
+    )
+    cycles = np.arange(transient, transient + record + 1)
+    strobe_obj = Strobe(cycle=cycles, time=t0 + cycles * period, state=strobe)
+    trajectory = None
+    if samples_per_cycle > 0:
+        trajectory = Trajectory(time=traj[:, 0].copy(), state=traj[:, 1:].copy())
+    stats_obj = RunStats(
+        steps=int(stats[kin.ST_ACCEPTED]),
+        rejected=int(stats[kin.ST_REJECTED]),
+        rhs_evals=int(stats[kin.ST_RHS_EVALS]),
+        events=int(stats[kin.ST_EVENTS]),
+        wall_s=wall,
+    )
+    return Simulation(
+        scene=scene,
+        model=MODEL_NAMES[model_id],
+        state_names=STATE_NAMES[model_id],
+        impacts=impacts,
+        strobe=strobe_obj,
+        trajectory=trajectory,
+        stats=stats_obj,
+        final_state=y,
+        transient=transient,
+        record=record,
+    )
+
+
+def _raise_on_failure(status, stats, clock, period, max_steps, y) -> None:
+    if status == kin.STATUS_OK:
+        return
+    where = f"at cycle {int(clock[0])}, t = {clock[0] * period + clock[1]:.6g}"
+    done = f"{int(stats[kin.ST_ACCEPTED])} steps accepted, {int(stats[kin.ST_REJECTED])} rejected"
+    if status == kin.STATUS_MAX_STEPS:
+        msg = (f"step budget max_steps = {max_steps} exhausted {where} ({done}); "
+               "raise max_steps or loosen rtol")
+    elif status == kin.STATUS_STEP_UNDERFLOW:
+        msg = (f"step size fell below round-off {where} ({done}, last h = {clock[2]:.3g}); "
+               "the contact is too stiff for this tolerance")
+    else:
+        msg = f"state became non-finite {where} ({done})"
+    raise SimulationError(msg)

@@ -1,0 +1,376 @@
+"""The command line: exit codes, one-line errors, and output that matches the library."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from chaospound import cli
+from chaospound.cli import main
+from chaospound.scene import PARAMETERS, Scene, list_presets, load_preset
+
+ROOT = Path(__file__).resolve().parents[1]
+PRESETS = ("fig3a", "fig3b", "fig4", "fig4-translational", "fig5", "tower-wall", "wall")
+CORNERS = {"A+", "A-", "B+", "B-", "face"}
+SHORT = ["--transient", "5", "--record", "2"]  # where the physics does not matter
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    """main() in-process: (exit code, stdout, stderr)."""
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def run_json(capsys, *argv: str) -> dict:
+    code, out, err = run(capsys, "simulate", *argv, "--json")
+    assert code == 0, err
+    assert err == ""
+    return json.loads(out)
+
+
+def run_subprocess(*argv: str, code: str | None = None) -> subprocess.CompletedProcess:
+    env = dict(
+        os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
+    )
+    command = [sys.executable, "-c", code] if code else [sys.executable, "-m", "chaospound", *argv]
+    return subprocess.run(command, capture_output=True, text=True, env=env, timeout=120)
+
+
+def assert_one_line_error(code: int, out: str, err: str, *names: str, exit_code: int = 2) -> None:
+    assert code == exit_code
+    assert out == ""
+    assert "Traceback" not in err
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("chaospound: error: ")
+    for name in names:
+        assert name in lines[0]
+
+
+# ============================================================ bad input
+@pytest.fixture
+def bad_toml(tmp_path: Path) -> Path:
+    path = tmp_path / "broken.toml"
+    path.write_text('name = "broken"\n[contact\nbeta = 1000.0\n', encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def scene_file(tmp_path: Path) -> Path:
+    path = tmp_path / "mine.toml"
+    path.write_text(load_preset("fig3a").to_toml(), encoding="utf-8")
+    return path
+
+
+BAD_SCENE_OPTIONS = [
+    (["--preset", "fig3a", "--set", "beta=-1"], ["beta", "-1"]),
+    (["--preset", "fig3a", "--set", "betta=1"], ["betta"]),
+    (["--preset", "fig3a", "--set", "beta"], ["beta"]),
+    (["--preset", "fig3a", "--set", "=3"], ["=3"]),
+    (["--preset", "nope"], ["nope"]),
+    ([], ["--preset"]),
+    (["--preset", "fig3a", "--rtol", "-1e-3"], ["rtol"]),
+    (["--preset", "fig3a", "--rtol", "tight"], ["rtol", "tight"]),
+    (["--preset", "fig3a", "--transient", "-2"], ["transient"]),
+    (["--preset", "fig3a", "--record", "0"], ["record"]),
+    (["--preset", "fig3a", "--record", "2.5"], ["record"]),
+    (["--preset", "fig3a", "--method", "euler"], ["method", "euler"]),
+    (["--preset", "fig3a", "--phase", "1.0"], ["phase"]),
+    (["--preset", "fig3a", "--set", "model=pair"], ["model", "pair"]),
+    (["--preset", "fig3a", "--trajectory", "-3"], ["--trajectory"]),
+    (["--preset", "fig3a", "--bogus"], ["--bogus"]),
+]
+
+
+@pytest.mark.parametrize(("options", "names"), BAD_SCENE_OPTIONS)
+def test_bad_scene_options_are_one_line_exit_2(capsys, options, names):
+    assert_one_line_error(*run(capsys, "simulate", *options, "--json"), *names)
+
+
+def test_malformed_toml_names_the_file(capsys, bad_toml):
+    assert_one_line_error(*run(capsys, "simulate", str(bad_toml)), bad_toml.name, "TOML")
+
+
+def test_bad_value_in_file_names_file_and_parameter(capsys, tmp_path):
+    path = tmp_path / "negative.toml"
+    path.write_text("[contact]\nbeta = -5.0\n", encoding="utf-8")
+    assert_one_line_error(*run(capsys, "simulate", str(path)), path.name, "beta")
+
+
+def test_missing_file_names_the_file(capsys, tmp_path):
+    missing = tmp_path / "absent.toml"
+    assert_one_line_error(*run(capsys, "simulate", str(missing)), "absent.toml")
+
+
+def test_both_preset_and_file(capsys, scene_file):
+    code, out, err = run(capsys, "simulate", "--preset", "fig3a", str(scene_file))
+    assert_one_line_error(code, out, err, "--preset", scene_file.name)
+
+
+@pytest.mark.parametrize(
+    ("argv", "names"),
+    [
+        (["presets", "nope"], ["nope"]),
+        (["params", "bogus"], ["bogus"]),
+        (["frobnicate"], ["frobnicate"]),
+        ([], ["COMMAND"]),
+    ],
+)
+def test_other_usage_errors(capsys, argv, names):
+    assert_one_line_error(*run(capsys, *argv), *names)
+
+
+@pytest.mark.parametrize(
+    ("argv", "names"),
+    [
+        (["simulate", "--preset", "fig3a", "--set", "beta=-1", "--json"], ["beta"]),
+        (["simulate", "--preset", "fig3a", "--set", "beta"], ["beta"]),
+        (["simulate", "--preset", "nope"], ["nope"]),
+        (["simulate", "--unknown-option"], ["--unknown-option"]),
+    ],
+)
+def test_subprocess_errors_have_no_traceback(argv, names):
+    done = run_subprocess(*argv)
+    assert_one_line_error(done.returncode, done.stdout, done.stderr, *names)
+
+
+def test_subprocess_malformed_toml(bad_toml):
+    done = run_subprocess("simulate", str(bad_toml), "--json")
+    assert_one_line_error(done.returncode, done.stdout, done.stderr, bad_toml.name)
+
+
+def test_help_and_validation_do_not_import_the_kernels():
+    probe = (
+        "import sys, contextlib, io\n"
+        "from chaospound.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    assert main(['--help']) == 0\n"
+        "    assert main(['simulate', '--help']) == 0\n"
+        "with contextlib.redirect_stderr(io.StringIO()):\n"
+        "    assert main(['simulate', '--preset', 'fig3a', '--set', 'beta=-1']) == 2\n"
+        "print(sorted(m for m in sys.modules if m.startswith(('numba', 'chaospound.simulate'))))\n"
+    )
+    done = run_subprocess(code=probe)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
+def test_help_returns_zero_instead_of_exiting(capsys):
+    code, out, err = run(capsys, "simulate", "--help")
+    assert code == 0
+    assert "--preset" in out and "--set" in out and "--trajectory" in out
+    assert err == ""
+
+
+# =================================================== runtime failures
+def test_numerical_failure_is_one_line_exit_1(capsys):
+    code, out, err = run(capsys, "simulate", "--preset", "fig3a", "--set", "max_steps=10", *SHORT)
+    assert_one_line_error(code, out, err, "max_steps", exit_code=1)
+
+
+def test_interrupt_is_one_line_exit_130(capsys, monkeypatch):
+    import chaospound.simulate
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(chaospound.simulate, "simulate", interrupted)
+    code, out, err = run(capsys, "simulate", "--preset", "fig3a", *SHORT)
+    assert_one_line_error(code, out, err, "interrupted", exit_code=130)
+
+
+# ================================================================ JSON
+def test_fig3a_json(capsys):
+    doc = run_json(capsys, "--preset", "fig3a")
+    assert doc["model"] == "towers"
+    assert set(PARAMETERS) <= set(doc["scene"])
+    assert doc["scene"]["transient"] == 40 and doc["scene"]["record"] == 8
+    assert doc["scene"]["ecc_y_A"] == pytest.approx(10.0)  # ecc_y_ratio 0.1 of length 100, resolved
+    strobe = np.array(doc["strobe"])
+    assert strobe.shape == (9, 12)
+    assert np.all(np.isfinite(strobe))
+    assert doc["impacts"], "fig3a pounds"
+    for impact in doc["impacts"]:
+        assert {"time", "phase", "velocity", "corner"} <= set(impact)
+        assert impact["corner"] in CORNERS
+        assert 0.0 <= impact["phase"] < 1.0
+        assert impact["velocity"] > 0.0
+    times = [impact["time"] for impact in doc["impacts"]]
+    assert times == sorted(times)
+    period = doc["scene"]["period"]
+    assert 40 * period <= times[0] and times[-1] < 48 * period  # onsets in the record window
+    assert {"steps", "rejected", "rhs_evals", "wall_s"} <= set(doc["stats"])
+    assert doc["stats"]["steps"] > 0 and doc["stats"]["rhs_evals"] > doc["stats"]["steps"]
+
+
+def test_translational_preset_runs_the_pair_model(capsys):
+    doc = run_json(capsys, "--preset", "fig4-translational", *SHORT)
+    assert doc["model"] == "pair"
+    strobe = np.array(doc["strobe"])
+    assert strobe.shape == (3, 4)
+    assert {impact["corner"] for impact in doc["impacts"]} <= {"face"}
+
+
+def test_options_reach_the_scene_and_match_the_library(capsys):
+    from chaospound.simulate import simulate
+
+    doc = run_json(
+        capsys, "--preset", "fig3a", "--set", "gap=0.5", "--set", "zeta=0.05", *SHORT,
+        "--method", "dop853", "--rtol", "1e-8", "--atol", "1e-11", "--phase", "0.25",
+    )  # fmt: skip
+    scene = doc["scene"]
+    assert (scene["gap"], scene["zeta_t_B"], scene["method"]) == (0.5, 0.05, "dop853")
+    assert (scene["rtol"], scene["atol"], scene["phase"]) == (1e-8, 1e-11, 0.25)
+    assert (scene["transient"], scene["record"]) == (5, 2)
+    expected = load_preset("fig3a").with_params(
+        gap=0.5, zeta=0.05, transient=5, record=2, method="dop853", rtol=1e-8, atol=1e-11,
+        phase=0.25,
+    )  # fmt: skip
+    sim = simulate(expected)
+    assert [i["time"] for i in doc["impacts"]] == sim.impacts.time.tolist()  # bitwise
+    assert [i["velocity"] for i in doc["impacts"]] == sim.impacts.velocity.tolist()
+    assert [i["corner"] for i in doc["impacts"]] == sim.impacts.labels
+    assert doc["strobe"] == sim.strobe.state.tolist()
+
+
+def test_run_options_win_over_set_and_paper_method_sets_its_tolerance(capsys):
+    doc = run_json(capsys, "--preset", "wall", "--set", "record=7", "--record", "2")
+    assert doc["scene"]["record"] == 2 and len(doc["strobe"]) == 3
+    paper = run_json(capsys, "--preset", "wall", "--method", "paper", *SHORT)["scene"]
+    assert (paper["method"], paper["rtol"]) == ("cash-karp", 1e-3)
+    tight = run_json(capsys, "--preset", "wall", "--method", "paper", "--rtol", "1e-7", *SHORT)
+    assert (tight["scene"]["method"], tight["scene"]["rtol"]) == ("cash-karp", 1e-7)
+
+
+def test_trajectory_samples_the_record_window(capsys):
+    doc = run_json(capsys, "--preset", "fig3a", *SHORT, "--trajectory", "8")
+    time = np.array(doc["trajectory"]["time"])
+    state = np.array(doc["trajectory"]["state"])
+    period = doc["scene"]["period"]
+    assert time.shape == (8 * 2 + 1,) and state.shape == (17, 12)
+    np.testing.assert_allclose(time, period * (5 + np.arange(17) / 8), rtol=1e-12)
+    # samples at whole cycles are the stroboscopic section
+    np.testing.assert_allclose(state[::8], np.array(doc["strobe"]), rtol=1e-9, atol=1e-9)
+
+
+# ======================================================== readable text
+def test_readable_output_table_matches_json(capsys):
+    doc = run_json(capsys, "--preset", "fig3a", *SHORT)
+    code, out, err = run(capsys, "simulate", "--preset", "fig3a", *SHORT)
+    assert code == 0 and err == ""
+    assert "towers (12 states" in out
+    assert "5 transient + 2 recorded" in out
+    assert "dopri5" in out and "rtol 1e-06" in out
+    lines = out.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.split()[:2] == ["#", "cycle"])
+    rows = [line.split() for line in lines[start + 1 :] if line.strip()][: len(doc["impacts"])]
+    assert len(rows) == len(doc["impacts"])
+    for k, (row, impact) in enumerate(zip(rows, doc["impacts"], strict=True)):
+        assert int(row[0]) == k + 1
+        assert row[4] == impact["corner"]
+        assert float(row[3]) == pytest.approx(impact["velocity"], rel=1e-5)
+    assert lines[start + 1 + len(rows)] == ""  # table ends, summary follows
+    per_cycle = len(doc["impacts"]) / 2
+    assert f"impacts per cycle  {per_cycle:.4g} ({len(doc['impacts'])} in 2 cycles)" in out
+    assert "us per accepted step" in out
+    last = [i["corner"] for i in doc["impacts"] if i["cycle"] == 6]
+    assert any(line.split()[3:] == last for line in lines if line.startswith("corners, cycle 6"))
+
+
+# ============================================================ presets
+def test_presets_lists_every_preset_with_its_description(capsys):
+    code, out, err = run(capsys, "presets")
+    assert code == 0 and err == ""
+    listed = [line.split()[0] for line in out.splitlines()[1:]]
+    assert listed == sorted(PRESETS) == list_presets()
+    assert load_preset("fig3a").description in out
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_preset_toml_loads_back_to_the_same_scene(capsys, name):
+    code, out, err = run(capsys, "presets", name)
+    assert code == 0 and err == ""
+    assert Scene.from_toml(out) == load_preset(name)
+
+
+def test_edited_preset_file_runs_like_the_preset(capsys, tmp_path):
+    code, out, _ = run(capsys, "presets", "fig3a")
+    path = tmp_path / "my.toml"
+    path.write_text(out, encoding="utf-8")
+    from_file = run_json(capsys, str(path), *SHORT)
+    from_preset = run_json(capsys, "--preset", "fig3a", *SHORT)
+    assert from_file["impacts"] == from_preset["impacts"]
+    assert from_file["scene"] == from_preset["scene"]
+
+
+def test_params_lists_every_parameter(capsys):
+    code, out, err = run(capsys, "params")
+    assert code == 0 and err == ""
+    listed = {line.split()[0] for line in out.splitlines()[1:]}
+    assert set(PARAMETERS) <= listed
+    code, out, _ = run(capsys, "params", "beta")
+    assert code == 0 and "must be > 0" in out and len(out.splitlines()) == 2
+
+
+# ============================================================= --output
+def test_output_writes_the_same_json(capsys, tmp_path):
+    target = tmp_path / "run.json"
+    code, out, err = run(
+        capsys, "simulate", "--preset", "wall", *SHORT, "--json", "--output", str(target)
+    )
+    assert code == 0 and err == ""
+    assert json.loads(target.read_text(encoding="utf-8")) == json.loads(out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.json"]  # no temp file left
+
+
+def test_output_refuses_to_overwrite(capsys, tmp_path):
+    target = tmp_path / "run.json"
+    target.write_text("keep me", encoding="utf-8")
+    code, out, err = run(capsys, "simulate", "--preset", "wall", *SHORT, "--output", str(target))
+    assert_one_line_error(code, out, err, "run.json", "--overwrite")
+    assert target.read_text(encoding="utf-8") == "keep me"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.json"]
+    code, out, err = run(
+        capsys, "simulate", "--preset", "wall", *SHORT, "--output", str(target), "--overwrite"
+    )
+    assert code == 0 and err == "" and "wrote" in out
+    assert json.loads(target.read_text(encoding="utf-8"))["model"] == "wall"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.json"]
+
+
+def test_output_into_missing_folder_is_refused_before_running(capsys, tmp_path, monkeypatch):
+    import chaospound.simulate
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("simulate ran although the output path is unusable")
+
+    monkeypatch.setattr(chaospound.simulate, "simulate", must_not_run)
+    target = tmp_path / "no" / "such" / "run.json"
+    code, out, err = run(capsys, "simulate", "--preset", "wall", "--output", str(target))
+    assert_one_line_error(code, out, err, "run.json")
+    assert not (tmp_path / "no").exists()
+
+
+def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
+    target = tmp_path / "run.json"
+
+    def broken_replace(src, dst):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(cli.os, "replace", broken_replace)
+    with pytest.raises(cli.CliError, match="run.json"):
+        cli.write_json_file({"x": 1.0}, str(target))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_non_finite_numbers_become_null(tmp_path):
+    target = tmp_path / "nan.json"
+    cli.write_json_file({"a": [1.0, float("nan")], "b": float("inf")}, str(target))
+    assert json.loads(target.read_text(encoding="utf-8")) == {"a": [1.0, None], "b": None}
