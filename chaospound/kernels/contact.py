@@ -33,6 +33,8 @@ from numba import njit
 EPS_SERIES = 0.2  #: |eps| below which the series is used (full contact)
 SERIES_RTOL = 1e-17  #: relative size of the last series term kept
 SERIES_MAX_TERMS = 80  #: hard cap on series terms (|eps| < 0.2 needs < 30)
+_RECIP = 1.0 / np.arange(1.0, SERIES_MAX_TERMS + 5.0)
+_RECIP = np.concatenate((np.array([np.inf]), _RECIP))  #: _RECIP[k] = 1 / k
 
 
 @njit(cache=True)
@@ -74,17 +76,18 @@ def _moments_series(j, mean, eps):
     s2 = 0.0  # sum_n C(j, 2n) eps^2n / (2n + 3)
     coef = 1.0  # generalised binomial coefficient C(j, k)
     power = 1.0  # eps^k
-    for k in range(SERIES_MAX_TERMS):
-        term = coef * power
-        if k % 2 == 0:
-            s0 += term / (k + 1.0)
-            s2 += term / (k + 3.0)
-        else:
-            s1 += term / (k + 2.0)
-        if k > 0 and abs(term) <= SERIES_RTOL * abs(s0):
-            break
-        coef *= (j - k) / (k + 1.0)
+    for k in range(0, SERIES_MAX_TERMS, 2):
+        even = coef * power  # k even
+        s0 += even * _RECIP[k + 1]
+        s2 += even * _RECIP[k + 3]
+        coef *= (j - k) * _RECIP[k + 1]
         power *= eps
+        odd = coef * power  # k + 1
+        s1 += odd * _RECIP[k + 3]
+        coef *= (j - k - 1.0) * _RECIP[k + 2]
+        power *= eps
+        if abs(even) + abs(odd) <= SERIES_RTOL * abs(s0):
+            break
     scale = mean**j
     return scale * s0, 0.5 * scale * s1, 0.25 * scale * s2
 
