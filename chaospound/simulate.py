@@ -29,6 +29,7 @@ __all__ = [
 ]
 
 CORNER_LABELS = kin.CORNER_LABELS
+_NO_TANGENT = np.zeros((0, 0))  #: tangent_log placeholder for plain runs
 
 
 class SimulationError(RuntimeError):
@@ -260,7 +261,7 @@ def simulate(
         n_imp = kin.run_cycles(
             model_id, method, p, y, clock, transient, transient + record,
             solver.rtol, solver.atol, h_fixed, solver.max_steps, solver.restart_at_kinks,
-            samples_per_cycle, strobe, traj, imp, imp_state, stats,
+            samples_per_cycle, strobe, traj, imp, imp_state, stats, _NO_TANGENT,
         )
         status = int(stats[kin.ST_STATUS])
         if status != kin.STATUS_OVERFLOW:

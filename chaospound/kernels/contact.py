@@ -30,6 +30,8 @@ The functions are exactly (bitwise) mirror-symmetric: swapping ``d_lo`` and
 import numpy as np
 from numba import njit
 
+from .powers import power
+
 EPS_SERIES = 0.2  #: |eps| below which the series is used (full contact)
 SERIES_RTOL = 1e-17  #: relative size of the last series term kept
 SERIES_MAX_TERMS = 80  #: hard cap on series terms (|eps| < 0.2 needs < 30)
@@ -75,20 +77,20 @@ def _moments_series(j, mean, eps):
     s1 = 0.0  # sum_n C(j, 2n+1) eps^(2n+1) / (2n + 3)
     s2 = 0.0  # sum_n C(j, 2n) eps^2n / (2n + 3)
     coef = 1.0  # generalised binomial coefficient C(j, k)
-    power = 1.0  # eps^k
+    eps_k = 1.0  # eps^k
     for k in range(0, SERIES_MAX_TERMS, 2):
-        even = coef * power  # k even
+        even = coef * eps_k  # k even
         s0 += even * _RECIP[k + 1]
         s2 += even * _RECIP[k + 3]
         coef *= (j - k) * _RECIP[k + 1]
-        power *= eps
-        odd = coef * power  # k + 1
+        eps_k *= eps
+        odd = coef * eps_k  # k + 1
         s1 += odd * _RECIP[k + 3]
         coef *= (j - k - 1.0) * _RECIP[k + 2]
-        power *= eps
+        eps_k *= eps
         if abs(even) + abs(odd) <= SERIES_RTOL * abs(s0):
             break
-    scale = mean**j
+    scale = power(mean, j)
     return scale * s0, 0.5 * scale * s1, 0.25 * scale * s2
 
 
@@ -106,7 +108,7 @@ def _moments_partial(j, d_lo, d_hi):
         p, q, sign = d_lo, d_hi, -1.0
     span = p - q
     frac = p / span
-    m0 = frac * p**j / (j + 1.0)
+    m0 = frac * power(p, j) / (j + 1.0)
     # int (1-tau)^j (1/2 - f tau) dtau = (j p - (j + 2) q) / (2 (j + 1) (j + 2) (p - q))
     m1 = sign * m0 * (j * p - (j + 2.0) * q) / (2.0 * (j + 2.0) * span)
     m2 = m0 * (0.25 - frac / (j + 2.0) + 2.0 * frac * frac / ((j + 2.0) * (j + 3.0)))
@@ -120,8 +122,8 @@ def _moments_skewed(j, d_lo, d_hi, mean):
     ``|d_hi - d_lo| >= 2 EPS_SERIES mean`` here, which bounds the cancellation.
     """
     delta = d_hi - d_lo
-    hi1 = d_hi ** (j + 1.0)
-    lo1 = d_lo ** (j + 1.0)
+    hi1 = power(d_hi, j + 1.0)
+    lo1 = power(d_lo, j + 1.0)
     hi2 = hi1 * d_hi
     lo2 = lo1 * d_lo
     diff1 = (hi1 - lo1) / (j + 1.0)

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from .events import end_value, locate_extremum, locate_root
-from .models import contact_ends, contact_forces, penetration_rate, rhs
+from .models import base_model, contact_ends, contact_forces, penetration_rate, rhs
 from .params import (
     MODEL_DIMS,
     P_HALF_L,
@@ -32,6 +32,7 @@ from .params import (
     T_EX,
     T_L,
     T_W,
+    TANGENT,
     TOWER_A,
     TOWER_B,
     TOWER_WALL,
@@ -93,7 +94,7 @@ MAX_EVENTS = 4  #: per step: two ends, each with at most two crossings
 
 @njit(cache=True)
 def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps,
-               restart, n_samples, strobe, traj, imp, imp_state, stats):
+               restart, n_samples, strobe, traj, imp, imp_state, stats, tangent_log):
     """Integrate from ``clock`` to the section ``k_end``, recording the window.
 
     Parameters
@@ -122,20 +123,29 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
     strobe : ndarray (k_end - k_record + 1, n)
         Stroboscopic states at the sections k_record .. k_end.
     imp, imp_state : ndarray
-        Impact table (capacity, N_IMP_FIELDS) and states at onset (capacity, n).
+        Impact table (capacity, N_IMP_FIELDS) and states at onset (capacity, n);
+        capacity 0 records no impacts.
     stats : ndarray of int64 (N_STATS,)
         Counters, see ST_*; ``stats[ST_STATUS]`` is the exit status.
+    tangent_log : ndarray (k_end - k_record, k)
+        Tangent models only (``model >= TANGENT``, ``y`` holding the state and k
+        tangent vectors): at every section the vectors are re-orthonormalised
+        (modified Gram-Schmidt, i.e. QR) and, for the cycles of the record
+        window, ``log R_ii`` of the cycle just ended is stored here.
 
     Returns
     -------
     int
         Number of impacts recorded.
     """
-    n = MODEL_DIMS[model]
+    n = y.shape[0]
+    base = base_model(model)
+    n_base = MODEL_DIMS[base]
+    n_vectors = n // n_base - 1 if model >= TANGENT else 0
     period = p[P_PERIOD]
     t0 = p[P_PHASE0]
     capacity = imp.shape[0]
-    two_ends = model == TOWERS or model == TOWER_WALL
+    two_ends = base == TOWERS or base == TOWER_WALL
 
     # workspaces (allocated once)
     f0 = np.empty(n)
@@ -184,6 +194,10 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
     while True:
         if at_section:
             at_section = False
+            if n_vectors > 0 and attempts > 0:
+                _orthonormalize(y, n_base, n_vectors, tangent_log, k - 1 - k_record)
+                rhs(model, t0, y, p, f0)
+                stats[ST_RHS_EVALS] += 1
             if k_record <= k <= k_end:
                 row = k - k_record
                 for i in range(n):
@@ -333,7 +347,7 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
             now_active = inside_lo or inside_hi
             if now_active and not active:
                 # onset of an episode
-                if not record_done and k >= k_record:
+                if not record_done and k >= k_record and capacity > 0:
                     if n_imp >= capacity:
                         status = STATUS_OVERFLOW
                         break
@@ -402,8 +416,9 @@ def _may_cross(d0, d1, slope0, slope1):
 
     ``slope0`` and ``slope1`` are ``h d'`` at the step ends. For a parabola the
     two end tangents meet exactly at the extremum's value; the departure of d
-    from a parabola over one step is O(h^3) times the third derivative of d, and is covered by a margin of
-    GRAZE_MARGIN times the spread of the slopes (plus a floor), so only an
+    from a parabola over one step is O(h^3) times its third derivative and is
+    covered by a margin of GRAZE_MARGIN times the spread of the slopes (plus a
+    floor), so only an
     excursion that stays clearly on one side of 0 skips the dense-output search.
     """
     spread = abs(slope0) + abs(slope1)
@@ -415,6 +430,34 @@ def _may_cross(d0, d1, slope0, slope1):
     if d0 < 0.0:  # outside: a maximum, can it reach d > 0?
         return extreme > -margin
     return extreme < margin  # inside: a minimum, can it reach d < 0?
+
+
+@njit(cache=True)
+def _orthonormalize(y, n_base, n_vectors, log_out, row):
+    """Modified Gram-Schmidt on the tangent vectors stored after the state.
+
+    Stores ``log R_ii`` (the log of each vector's norm after removing its
+    projections on the previous ones) in ``log_out[row]`` when ``row`` is a
+    valid row, and replaces the vectors by the orthonormal basis.
+    """
+    store = 0 <= row < log_out.shape[0]
+    for i in range(n_vectors):
+        a = n_base * (i + 1)
+        for j in range(i):
+            b = n_base * (j + 1)
+            dot = 0.0
+            for c in range(n_base):
+                dot += y[a + c] * y[b + c]
+            for c in range(n_base):
+                y[a + c] -= dot * y[b + c]
+        norm = 0.0
+        for c in range(n_base):
+            norm += y[a + c] * y[a + c]
+        norm = np.sqrt(norm)
+        if store:
+            log_out[row, i] = np.log(norm)
+        for c in range(n_base):
+            y[a + c] /= norm
 
 
 @njit(cache=True)

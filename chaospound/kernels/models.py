@@ -21,21 +21,23 @@ with ``I0 = (beta/L) int d+^chi dy`` and ``F1 = (beta/L) int d+^chi (y - y_c) dy
     Q_thA = F1 - (y_cA - y_c) I0,   Q_thB = -(F1 - (y_cB - y_c) I0)
 """
 
-import math
-
+import numpy as np
 from numba import njit
 
-from .contact import line_contact, line_contact_gradient, line_potential
+from .contact import line_contact, line_potential
 from .params import (
+    DUFFING,
+    LORENZ,
+    MODEL_DIMS,
     P_BETA,
     P_CHI,
     P_GAP,
-    P_GROUND,
     P_HALF_L,
-    P_PERIOD_RATIO,
     P_Y_C,
     P_Y_OFF,
     PAIR,
+    REF_0,
+    REF_2,
     T_CT,
     T_CX,
     T_CY,
@@ -46,53 +48,81 @@ from .params import (
     T_OM2,
     T_OMT2,
     T_RHO2,
+    TANGENT,
     TOWER_A,
     TOWER_B,
     TOWER_WALL,
     TOWERS,
+    WALL,
 )
-
-
-@njit(cache=True)
-def ground(t, p):
-    """Ground displacement and velocity ``(u_g, u_g')`` at forcing time t."""
-    if p[P_GROUND] == 0.0:
-        return 0.0, 0.0
-    r = p[P_PERIOD_RATIO]
-    arg = t / r
-    return math.sin(arg), math.cos(arg) / r
+from .powers import ground, power
+from .reference import duffing_rhs, lorenz_rhs
+from .tangent import apply_jvp, linearize
 
 
 @njit(cache=True)
 def rhs(model, t, y, p, out):
-    """Time derivative of the state (MODEL.md eqs. of section 2), into ``out``."""
-    ug, vg = ground(t, p)
+    """Time derivative of the state (MODEL.md section 2), into ``out``.
+
+    Model ids ``TANGENT + base`` integrate the state of ``base`` together with
+    k tangent vectors stored after it (``y`` of length n (1 + k)): the
+    variational equations ``V' = J V`` of MODEL.md section 5.
+    """
+    if model >= TANGENT:
+        base = model - TANGENT
+        _rhs_base(base, t, y, p, out)
+        n = MODEL_DIMS[base]
+        lin = linearize(base, t, y, p)
+        for i in range(1, y.shape[0] // n):
+            apply_jvp(base, p, lin, y[i * n:(i + 1) * n], out[i * n:(i + 1) * n])
+    else:
+        _rhs_base(model, t, y, p, out)
+
+
+@njit(cache=True)
+def _rhs_base(model, t, y, p, out):
     if model == TOWERS:
+        ug, vg = ground(t, p)
         _rhs_towers(y, p, ug, vg, out)
     elif model == PAIR:
+        ug, vg = ground(t, p)
         _rhs_pair(y, p, ug, vg, out)
     elif model == TOWER_WALL:
+        ug, vg = ground(t, p)
         _rhs_tower_wall(y, p, ug, vg, out)
-    else:
+    elif model == WALL:
+        ug, vg = ground(t, p)
         _rhs_wall(y, p, ug, vg, out)
+    elif model == LORENZ:
+        lorenz_rhs(t, y, p, out)
+    else:
+        duffing_rhs(t, y, p, out)
 
 
 @njit(cache=True)
 def jacobian(model, t, y, p, jac):
-    """Analytic Jacobian ``d rhs / d y`` (dim x dim), into ``jac``."""
-    ug, _ = ground(t, p)
-    jac[:, :] = 0.0
-    if model == TOWERS:
-        _jac_tower_linear(p, TOWER_A, 0, jac)
-        _jac_tower_linear(p, TOWER_B, 6, jac)
-        _jac_contact_towers(y, p, jac)
-    elif model == PAIR:
-        _jac_pair(y, p, jac)
-    elif model == TOWER_WALL:
-        _jac_tower_linear(p, TOWER_A, 0, jac)
-        _jac_contact_tower_wall(y, p, ug, jac)
-    else:
-        _jac_wall(y, p, ug, jac)
+    """Analytic Jacobian ``d rhs / d y`` of a base model (n x n), into ``jac``.
+
+    Built column by column from the Jacobian-vector product of
+    :mod:`.tangent` (the one the variational equations use); allocates two
+    vectors, so it is meant for tests and users, not inner loops.
+    """
+    n = MODEL_DIMS[model]
+    lin = linearize(model, t, y, p)
+    unit = np.zeros(n)
+    column = np.zeros(n)
+    for c in range(n):
+        unit[c] = 1.0
+        apply_jvp(model, p, lin, unit, column)
+        unit[c] = 0.0
+        for r in range(n):
+            jac[r, c] = column[r]
+
+
+@njit(cache=True)
+def base_model(model):
+    """The base model of a (possibly tangent) model id."""
+    return model - TANGENT if model >= TANGENT else model
 
 
 @njit(cache=True)
@@ -102,8 +132,16 @@ def contact_ends(model, t, y, p, out):
     Writes ``out[0] = d_lo``, ``out[1] = d_hi``, ``out[2] = d d_lo/dt``,
     ``out[3] = d d_hi/dt`` (rates at fixed y: the relative velocity of the
     material points, MODEL.md section 3). For the translational models both
-    ends carry the single penetration d.
+    ends carry the single penetration d; the reference systems have no
+    contact: (-1, -1, 0, 0).
     """
+    model = base_model(model)
+    if model == LORENZ or model == DUFFING:
+        out[0] = -1.0
+        out[1] = -1.0
+        out[2] = 0.0
+        out[3] = 0.0
+        return
     ug, vg = ground(t, p)
     if model == TOWERS or model == TOWER_WALL:
         half = p[P_HALF_L]
@@ -132,6 +170,7 @@ def penetration_rate(model, t, y, p, y_at):
     ``V = X_A' - X_B' - th_A' (y - y_cA) + th_B' (y - y_cB) + th_A Y_A' - th_B Y_B'``
     (units of A_g omega_Ax); the wall models use the wall's velocity u_g'.
     """
+    model = base_model(model)
     if model == TOWERS:
         y_ca = y[2] + p[TOWER_A + T_EY]
         y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
@@ -150,6 +189,9 @@ def penetration_rate(model, t, y, p, y_at):
 @njit(cache=True)
 def contact_potential(model, t, y, p):
     """Contact potential V (MODEL.md section 3), units of A_g^2 k_Ax."""
+    model = base_model(model)
+    if model == LORENZ or model == DUFFING:
+        return 0.0
     ug, _ = ground(t, p)
     beta = p[P_BETA]
     chi = p[P_CHI]
@@ -165,7 +207,7 @@ def contact_potential(model, t, y, p):
         d = y[0] - ug - p[P_GAP]
     if d <= 0.0:
         return 0.0
-    return beta * d ** (chi + 1.0) / (chi + 1.0)
+    return beta * power(d, chi + 1.0) / (chi + 1.0)
 
 
 @njit(cache=True)
@@ -176,9 +218,12 @@ def contact_forces(model, t, y, p, q_out):
     entries a model does not have are set to 0. Returns the resultant
     compressive force ``-Q_XA`` (units of A_g k_Ax).
     """
+    model = base_model(model)
     ug, _ = ground(t, p)
     for i in range(6):
         q_out[i] = 0.0
+    if model == LORENZ or model == DUFFING:
+        return 0.0
     if model == TOWERS:
         _towers_forces(y, p, q_out)
     elif model == TOWER_WALL:
@@ -188,7 +233,7 @@ def contact_forces(model, t, y, p, q_out):
             d = y[0] - y[2] - p[P_GAP]
         else:
             d = y[0] - ug - p[P_GAP]
-        force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+        force = p[P_BETA] * power(d, p[P_CHI]) if d > 0.0 else 0.0
         q_out[0] = -force
         if model == PAIR:
             q_out[3] = force
@@ -219,6 +264,11 @@ def energy(model, y, p):
 @njit(cache=True)
 def jacobian_trace(model, p):
     """Constant trace of the Jacobian (MODEL.md section 5): sum of all exponents."""
+    model = base_model(model)
+    if model == LORENZ:
+        return -p[REF_0] - 1.0 - p[REF_2]
+    if model == DUFFING:
+        return -p[REF_0]
     tr = -p[TOWER_A + T_CX]
     if model == TOWERS or model == TOWER_WALL:
         tr -= p[TOWER_A + T_CY] + p[TOWER_A + T_CT]
@@ -325,7 +375,7 @@ def _rhs_tower_wall(y, p, ug, vg, out):
 @njit(cache=True)
 def _rhs_pair(y, p, ug, vg, out):
     d = y[0] - y[2] - p[P_GAP]
-    force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+    force = p[P_BETA] * power(d, p[P_CHI]) if d > 0.0 else 0.0
     a = TOWER_A
     b = TOWER_B
     out[0] = y[1]
@@ -337,138 +387,10 @@ def _rhs_pair(y, p, ug, vg, out):
 @njit(cache=True)
 def _rhs_wall(y, p, ug, vg, out):
     d = y[0] - ug - p[P_GAP]
-    force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+    force = p[P_BETA] * power(d, p[P_CHI]) if d > 0.0 else 0.0
     a = TOWER_A
     out[0] = y[1]
     out[1] = -p[a + T_CX] * (y[1] - vg) - p[a + T_OM2] * (y[0] - ug) - p[a + T_MU] * force
-
-
-@njit(cache=True)
-def _jac_tower_linear(p, base, off, jac):
-    """Structural (contact-free) part of one tower's Jacobian block."""
-    om2 = p[base + T_OM2]
-    kth = p[base + T_KTH]
-    ex = p[base + T_EX]
-    ey = p[base + T_EY]
-    for k in range(3):
-        jac[off + 2 * k, off + 2 * k + 1] = 1.0
-    jac[off + 1, off + 0] = -om2
-    jac[off + 1, off + 1] = -p[base + T_CX]
-    jac[off + 1, off + 4] = -om2 * ey
-    jac[off + 3, off + 2] = -om2
-    jac[off + 3, off + 3] = -p[base + T_CY]
-    jac[off + 3, off + 4] = om2 * ex
-    jac[off + 5, off + 0] = -kth * ey
-    jac[off + 5, off + 2] = kth * ex
-    jac[off + 5, off + 4] = -p[base + T_OMT2]
-    jac[off + 5, off + 5] = -p[base + T_CT]
-
-
-@njit(cache=True)
-def _jac_contact_towers(y, p, jac):
-    """Contact part of the 12-state Jacobian (product rule on Q(q))."""
-    th_a = y[4]
-    th_b = y[10]
-    y_c = p[P_Y_C]
-    half = p[P_HALF_L]
-    beta = p[P_BETA]
-    chi = p[P_CHI]
-    y_ca = y[2] + p[TOWER_A + T_EY]
-    y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
-    d_c = y[0] - y[6] - p[P_GAP] - th_a * (y_c - y_ca) + th_b * (y_c - y_cb)
-    force, moment, d_lo, d_hi = line_contact(d_c, th_b - th_a, half, beta, chi)
-    if d_lo <= 0.0 and d_hi <= 0.0:
-        return
-    g = line_contact_gradient(d_lo, d_hi, half, beta, chi)
-    # derivatives of d_c and slope w.r.t. the 12 states (positions only)
-    cols = (0, 2, 4, 6, 8, 10)
-    ddc = (1.0, th_a, y_ca - y_c, -1.0, -th_b, y_c - y_cb)
-    dsl = (0.0, 0.0, -1.0, 0.0, 0.0, 1.0)
-    mu_a = p[TOWER_A + T_MU]
-    mu_b = p[TOWER_B + T_MU]
-    rho2_a = p[TOWER_A + T_RHO2]
-    rho2_b = p[TOWER_B + T_RHO2]
-    for k in range(6):
-        col = cols[k]
-        dforce = g[0] * ddc[k] + g[1] * dsl[k]
-        dmoment = g[2] * ddc[k] + g[3] * dsl[k]
-        d_qtha = dmoment - (y_ca - y_c) * dforce
-        d_qthb = -dmoment + (y_cb - y_c) * dforce
-        d_qya = -th_a * dforce
-        d_qyb = th_b * dforce
-        if col == 4:
-            d_qya -= force
-        if col == 10:
-            d_qyb += force
-        if col == 2:
-            d_qtha -= force
-        if col == 8:
-            d_qthb += force
-        jac[1, col] += -mu_a * dforce
-        jac[3, col] += mu_a * d_qya
-        jac[5, col] += mu_a * d_qtha / rho2_a
-        jac[7, col] += mu_b * dforce
-        jac[9, col] += mu_b * d_qyb
-        jac[11, col] += mu_b * d_qthb / rho2_b
-
-
-@njit(cache=True)
-def _jac_contact_tower_wall(y, p, ug, jac):
-    th_a = y[4]
-    y_c = p[P_Y_C]
-    half = p[P_HALF_L]
-    beta = p[P_BETA]
-    chi = p[P_CHI]
-    y_ca = y[2] + p[TOWER_A + T_EY]
-    d_c = y[0] - ug - p[P_GAP] - th_a * (y_c - y_ca)
-    force, moment, d_lo, d_hi = line_contact(d_c, -th_a, half, beta, chi)
-    if d_lo <= 0.0 and d_hi <= 0.0:
-        return
-    g = line_contact_gradient(d_lo, d_hi, half, beta, chi)
-    cols = (0, 2, 4)
-    ddc = (1.0, th_a, y_ca - y_c)
-    dsl = (0.0, 0.0, -1.0)
-    mu_a = p[TOWER_A + T_MU]
-    rho2_a = p[TOWER_A + T_RHO2]
-    for k in range(3):
-        col = cols[k]
-        dforce = g[0] * ddc[k] + g[1] * dsl[k]
-        dmoment = g[2] * ddc[k] + g[3] * dsl[k]
-        d_qtha = dmoment - (y_ca - y_c) * dforce
-        d_qya = -th_a * dforce
-        if col == 4:
-            d_qya -= force
-        if col == 2:
-            d_qtha -= force
-        jac[1, col] += -mu_a * dforce
-        jac[3, col] += mu_a * d_qya
-        jac[5, col] += mu_a * d_qtha / rho2_a
-
-
-@njit(cache=True)
-def _jac_pair(y, p, jac):
-    a = TOWER_A
-    b = TOWER_B
-    d = y[0] - y[2] - p[P_GAP]
-    stiff = p[P_BETA] * p[P_CHI] * d ** (p[P_CHI] - 1.0) if d > 0.0 else 0.0
-    jac[0, 1] = 1.0
-    jac[1, 0] = -p[a + T_OM2] - p[a + T_MU] * stiff
-    jac[1, 1] = -p[a + T_CX]
-    jac[1, 2] = p[a + T_MU] * stiff
-    jac[2, 3] = 1.0
-    jac[3, 2] = -p[b + T_OM2] - p[b + T_MU] * stiff
-    jac[3, 3] = -p[b + T_CX]
-    jac[3, 0] = p[b + T_MU] * stiff
-
-
-@njit(cache=True)
-def _jac_wall(y, p, ug, jac):
-    a = TOWER_A
-    d = y[0] - ug - p[P_GAP]
-    stiff = p[P_BETA] * p[P_CHI] * d ** (p[P_CHI] - 1.0) if d > 0.0 else 0.0
-    jac[0, 1] = 1.0
-    jac[1, 0] = -p[a + T_OM2] - p[a + T_MU] * stiff
-    jac[1, 1] = -p[a + T_CX]
 
 
 @njit(cache=True)

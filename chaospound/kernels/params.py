@@ -16,8 +16,13 @@ TOWER_WALL = 1  #: tower A (X, Y, th) against a ground-borne wall (6 states)
 PAIR = 2  #: Chau & Wei (2001): X_A and X_B (4 states)
 TOWERS = 3  #: the general 12-state torsional model
 
-MODEL_NAMES = ("wall", "tower-wall", "pair", "towers")
-MODEL_DIMS = (2, 6, 4, 12)
+LORENZ = 4  #: Lorenz (1963) system, a validation case for the Lyapunov engine
+DUFFING = 5  #: forced Duffing oscillator x'' + d x' + a x + b x^3 = g cos(w t)
+TANGENT = 8  #: offset of the tangent (variational) models: id = TANGENT + base id
+
+MODEL_NAMES = ("wall", "tower-wall", "pair", "towers")  #: the pounding models
+SYSTEM_NAMES = MODEL_NAMES + ("lorenz", "duffing")  #: every built-in system
+MODEL_DIMS = (2, 6, 4, 12, 3, 2)  #: state dimension of each base model
 
 # ------------------------------------------------------------ global entries
 P_PERIOD_RATIO = 0  #: r = T / T_Ax; u_g(t) = sin(t / r)
@@ -48,5 +53,12 @@ T_OMT2 = 9  #: Om_ti^2 = Om_i^2 (l^2 + w^2 + 4|e|^2) / (4 rho^2)
 T_L = 10  #: l_i, plan length along the gap line (y)
 T_W = 11  #: w_i, plan width across the gap (x)
 T_KTH = 12  #: Om_i^2 / rho_i^2 (coupling of translation into torsion)
+
+# ------------------------------------------- reference (validation) systems
+REF_0 = 43  #: Lorenz sigma; Duffing damping d
+REF_1 = 44  #: Lorenz rho; Duffing linear stiffness a
+REF_2 = 45  #: Lorenz b; Duffing cubic stiffness b
+REF_3 = 46  #: Duffing forcing amplitude g
+REF_4 = 47  #: Duffing forcing frequency w (the period P_PERIOD is 2 pi / w)
 
 N_PARAMS = 50
