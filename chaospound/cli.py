@@ -118,7 +118,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for add in (_add_presets, _add_params, _add_simulate):
+    for add in (_add_presets, _add_params, _add_simulate, _add_bench):
         add(commands)
     return parser
 
@@ -418,6 +418,40 @@ def _summary(sim: Simulation, samples_per_cycle: int, output: str | None) -> lis
     if output is not None:
         rows.append(("wrote", output))
     return rows
+
+
+# ================================================================ bench
+def _add_bench(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "bench",
+        help="speed against scipy's solve_ivp on this machine",
+        description="Time one steady run (default: preset fig3a) against "
+        "scipy.integrate.solve_ivp(RK45) with a pure-Python and a numba right-hand side, "
+        "same span and tolerances, in one run; also 'chaospound simulate' end to end.",
+    )
+    add_scene_options(parser)
+    group = parser.add_argument_group("benchmark")
+    group.add_argument(
+        "--repeats", type=_count, default=5, metavar="N", help="timed runs each, best counts (5)"
+    )
+    group.add_argument(
+        "--no-cli", action="store_true", help="skip timing 'chaospound simulate' in a subprocess"
+    )
+    group.add_argument("--json", action="store_true", help="print one JSON document only")
+    parser.set_defaults(func=_cmd_bench)
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from chaospound.bench import format_benchmark, run_benchmark
+
+    if args.repeats < 1:
+        raise CliError(f"--repeats {args.repeats}: must be an integer >= 1")
+    if args.preset is None and args.scene_file is None:
+        args.preset = "fig3a"
+    scene = scene_from_args(args)
+    result = run_benchmark(scene, repeats=args.repeats, cli=not args.no_cli)
+    _emit(_json_text(result) if args.json else format_benchmark(result))
+    return EXIT_OK
 
 
 # ============================================================== helpers

@@ -1,0 +1,43 @@
+"""Speed of one steady fig3a run against scipy's solve_ivp (RK45), on this machine.
+
+Runs :func:`chaospound.bench.run_benchmark` on the preset fig3a (40 + 8
+cycles, dopri5, rtol 1e-6): chaospound's ``simulate`` against
+``solve_ivp(method="RK45")`` with a pure-Python and with a numba right-hand
+side over the same span and tolerances, plus ``chaospound simulate --preset
+fig3a`` end to end in a subprocess (warm numba cache). Prints the table and
+writes every number to ``results/bench_simulate.json``.
+
+Usage::
+
+    python benchmarks/bench_simulate.py [--preset fig3a] [--repeats 5] [--output PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from chaospound.bench import format_benchmark, run_benchmark
+from chaospound.cli import write_json_file
+from chaospound.scene import load_preset
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_OUTPUT = ROOT / "results" / "bench_simulate.json"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--preset", default="fig3a", help="scene (default fig3a)")
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs each (best counts)")
+    parser.add_argument("--output", default=str(DEFAULT_OUTPUT), help="JSON file written")
+    args = parser.parse_args()
+
+    result = run_benchmark(load_preset(args.preset), repeats=args.repeats)
+    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    write_json_file(result, args.output, overwrite=True)
+    print(format_benchmark(result), end="")
+    print(f"\nwrote {args.output}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,583 @@
+"""Speed of a steady run against scipy's ``solve_ivp`` on the same equations.
+
+:func:`run_benchmark` times, on one scene and in one process:
+
+* ``chaospound``: :func:`chaospound.simulate.simulate` (jitted Dormand-Prince
+  with located contact events), best of ``repeats`` after a warm-up call;
+* ``scipy-python``: ``scipy.integrate.solve_ivp(method="RK45")`` with
+  :func:`python_rhs`, an independent pure-Python transcription of the same
+  equations (MODEL.md sections 2-3);
+* ``scipy-numba``: ``solve_ivp(method="RK45")`` with the jitted kernel
+  :func:`chaospound.kernels.models.rhs` wrapped in a Python function;
+* ``cli``: ``chaospound simulate`` end to end in a subprocess (warm numba
+  cache), best of ``cli_repeats``.
+
+All runs cover the same time span (the scene's transient + record cycles, from
+forcing time 0) with the scene's rtol and atol, from the same initial state.
+``solve_ivp`` has no contact-event landing: it integrates the plain ODE, so
+its step count differs from chaospound's. Two speed-ups are reported:
+
+* ``wall``: ratio of total wall times for the same run (the user's view);
+* ``per_step``: ratio of times per accepted step (cost of one step, whatever
+  the step counts).
+
+Speed is measured here, never asserted in tests. The only file this module
+writes is a temporary scene TOML for timing the CLI on a modified scene.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from .kernels.contact import EPS_SERIES, SERIES_MAX_TERMS, SERIES_RTOL
+from .kernels.params import (
+    MODEL_DIMS,
+    MODEL_NAMES,
+    P_BETA,
+    P_CHI,
+    P_GAP,
+    P_GROUND,
+    P_HALF_L,
+    P_PERIOD_RATIO,
+    P_Y_C,
+    P_Y_OFF,
+    PAIR,
+    T_CT,
+    T_CX,
+    T_CY,
+    T_EX,
+    T_EY,
+    T_KTH,
+    T_MU,
+    T_OM2,
+    T_OMT2,
+    T_RHO2,
+    TOWER_A,
+    TOWER_B,
+    TOWER_WALL,
+    TOWERS,
+    WALL,
+)
+from .scene import Scene
+from .simulate import SimulationError, simulate
+
+__all__ = ["TARGETS", "format_benchmark", "python_rhs", "run_benchmark"]
+
+#: the issue's targets for fig3a (40 + 8 cycles, rtol 1e-6)
+TARGETS = {
+    "us_per_step": 0.5,  #: chaospound, microseconds per accepted step, at most
+    "speedup_python": 100.0,  #: wall-time speed-up over solve_ivp + Python rhs, at least
+    "speedup_numba": 75.0,  #: wall-time speed-up over solve_ivp + numba rhs, at least
+    "cli_s": 2.0,  #: ``chaospound simulate`` end to end, warm cache, seconds, at most
+}
+#: stop repeating a solve_ivp run once its timed runs have taken this long (s)
+SCIPY_BUDGET_S = 20.0
+RUNS = ("chaospound", "scipy-python", "scipy-numba")
+RUN_LABELS = {
+    "chaospound": "chaospound simulate",
+    "scipy-python": "solve_ivp RK45, Python rhs",
+    "scipy-numba": "solve_ivp RK45, numba rhs",
+}
+
+
+# ================================================================ public
+def run_benchmark(
+    scene: Scene,
+    *,
+    repeats: int = 5,
+    cli: bool = True,
+    cli_repeats: int = 3,
+    scipy_budget_s: float = SCIPY_BUDGET_S,
+) -> dict:
+    """Time chaospound against ``solve_ivp(RK45)`` on one scene.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene; its run settings (transient + record cycles, phase) fix the
+        time span, its solver settings rtol and atol.
+    repeats : int
+        Timed runs of each integration (>= 1); the best (minimum) counts.
+        ``solve_ivp`` stops repeating once its runs exceed ``scipy_budget_s``.
+    cli : bool
+        Also time ``chaospound simulate`` end to end in a subprocess.
+    cli_repeats : int
+        Timed subprocess runs (after one that warms the numba cache).
+    scipy_budget_s : float
+        Time budget of the repeated runs of one ``solve_ivp`` variant (s).
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``scene``, ``model``, ``n_states``, ``span``, ``rtol``,
+        ``atol``, ``method``, ``machine``, one entry per run in :data:`RUNS`
+        (``wall_s``, ``steps``, ``rhs_evals``, ``us_per_step``,
+        ``ns_per_rhs_eval``, ``repeats``, ...), ``speedup`` (``wall`` and
+        ``per_step`` ratios of each scipy run to chaospound), ``cli``
+        (``None`` when not timed) and ``targets``.
+    """
+    if repeats < 1 or cli_repeats < 1:
+        raise ValueError(f"repeats = {repeats}, cli_repeats = {cli_repeats}: need >= 1")
+    model = scene.model_id()
+    p = scene.pack(model)
+    y0 = scene.initial_vector(model)
+    period = scene.period
+    cycles = scene.run.transient + scene.run.record
+    t_end = scene.run.phase * period + cycles * period
+    rtol, atol = scene.solver.rtol, scene.solver.atol
+
+    simulate(scene)  # warm-up: loads or compiles the kernels
+    sims = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        sim = simulate(scene)
+        sims.append((time.perf_counter() - start, sim))
+    wall, sim = min(sims, key=lambda pair: pair[0])
+    y_end = sim.strobe.state[-1]
+    ours = _entry(wall, sim.stats.steps, sim.stats.rhs_evals, repeats)
+    ours.update(
+        kernel_s=sim.stats.wall_s,
+        rejected=sim.stats.rejected,
+        events=sim.stats.events,
+        impacts=len(sim.impacts),
+    )
+
+    result = {
+        "scene": scene.name,
+        "model": MODEL_NAMES[model],
+        "n_states": MODEL_DIMS[model],
+        "span": {
+            "t_start": 0.0,
+            "t_end": t_end,
+            "transient": scene.run.transient,
+            "record": scene.run.record,
+            "phase": scene.run.phase,
+        },
+        "method": scene.solver.method,
+        "rtol": rtol,
+        "atol": atol,
+        "machine": machine_info(),
+        "chaospound": ours,
+    }
+    funs = {
+        "scipy-python": python_fun(model, p),
+        "scipy-numba": numba_fun(model, p),
+    }
+    for name, fun in funs.items():
+        entry = _time_solve_ivp(fun, y0, t_end, rtol, atol, repeats, scipy_budget_s, period)
+        entry["final_state_diff"] = float(np.max(np.abs(entry.pop("y_end") - y_end)))
+        result[name] = entry
+    result["speedup"] = {
+        name: {
+            "wall": result[name]["wall_s"] / ours["wall_s"],
+            "per_step": result[name]["us_per_step"] / ours["us_per_step"],
+        }
+        for name in funs
+    }
+    result["cli"] = time_cli(scene, repeats=cli_repeats) if cli else None
+    result["targets"] = _targets(result)
+    return result
+
+
+def format_benchmark(result: dict) -> str:
+    """The benchmark as a readable text table (from :func:`run_benchmark`'s dict)."""
+    span = result["span"]
+    machine = result["machine"]
+    head = (
+        f"scene {result['scene']} ({result['model']}, {result['n_states']} states): "
+        f"{span['transient']} + {span['record']} cycles, t = 0 .. {span['t_end']:.6g}; "
+        f"{result['method']} vs RK45, rtol {result['rtol']:g}, atol {result['atol']:g}\n"
+        f"machine: {machine['cpu']}, {machine['cpu_count']} CPUs; Python {machine['python']}, "
+        f"numpy {machine['numpy']}, scipy {machine['scipy']}, numba {machine['numba']}"
+    )
+    columns = ("run", "wall ms", "steps", "rhs evals", "us/step", "ns/rhs",
+               "x wall", "x per step", "runs", "|dy| end")  # fmt: skip
+    rows = []
+    for name in RUNS:
+        entry = result[name]
+        speed = result["speedup"].get(name, {"wall": 1.0, "per_step": 1.0})
+        diff = entry.get("final_state_diff")
+        rows.append((
+            RUN_LABELS[name],
+            f"{1e3 * entry['wall_s']:.4g}",
+            str(entry["steps"]),
+            str(entry["rhs_evals"]),
+            f"{entry['us_per_step']:.3g}",
+            f"{entry['ns_per_rhs_eval']:.0f}",
+            f"{speed['wall']:.1f}",
+            f"{speed['per_step']:.1f}",
+            str(entry["repeats"]),
+            "-" if diff is None else f"{diff:.2g}",
+        ))  # fmt: skip
+    ours = result["chaospound"]
+    notes = [
+        f"chaospound: {ours['rejected']} rejected steps, {ours['events']} located contact "
+        f"events, {ours['impacts']} impacts recorded; kernel time {1e3 * ours['kernel_s']:.4g} ms",
+        "x wall = scipy wall time / chaospound wall time for the same run; "
+        "x per step = the same for time per accepted step",
+        "|dy| end = max |y_scipy - y_chaospound| at the end of the span "
+        "(solve_ivp does not land on contact kinks)",
+    ]
+    cli = result["cli"]
+    if cli is not None:
+        notes.append(
+            f"CLI end to end: {cli['wall_s']:.3g} s, best of {cli['repeats']} "
+            f"(warm cache): {' '.join(cli['argv'])}"
+        )
+    lines = [
+        f"  {label}: {goal['value']:.4g} (target {goal['comparison']} {goal['target']:g}) "
+        f"{'met' if goal['met'] else 'NOT met'}"
+        for label, goal in result["targets"].items()
+    ]
+    return "\n\n".join([
+        head,
+        _table(columns, rows, "lrrrrrrrrr"),
+        "\n".join(notes),
+        "issue targets (stated for fig3a, 40 + 8 cycles):\n" + "\n".join(lines),
+    ]) + "\n"  # fmt: skip
+
+
+def python_rhs(model: int, t: float, y: Sequence[float], p: Sequence[float]) -> list[float]:
+    """Right-hand side of the pounding equations in plain Python (no numba).
+
+    An independent transcription of MODEL.md sections 2-3 with the closed-form
+    line-contact moments of :mod:`chaospound.kernels.contact`, written with
+    ``math`` on Python floats, as a scipy user would write it. The benchmark's
+    scipy baseline uses it; the tests check it against
+    :func:`chaospound.kernels.models.rhs`.
+
+    Parameters
+    ----------
+    model : int
+        Model id (:mod:`chaospound.kernels.params`).
+    t : float
+        Forcing time; the ground moves as ``u_g = sin(t / r)``.
+    y : sequence of float
+        State in the model's order.
+    p : sequence of float
+        Packed parameters (``Scene.pack``); a list is fastest.
+
+    Returns
+    -------
+    list of float
+        ``dy/dt``.
+    """
+    if p[P_GROUND] == 0.0:
+        ug = vg = 0.0
+    else:
+        r = p[P_PERIOD_RATIO]
+        ug = math.sin(t / r)
+        vg = math.cos(t / r) / r
+    if model == TOWERS:
+        return _py_towers(y, p, ug, vg)
+    if model == TOWER_WALL:
+        return _py_tower_wall(y, p, ug, vg)
+    if model == PAIR:
+        return _py_pair(y, p, ug, vg)
+    if model == WALL:
+        return _py_wall(y, p, ug, vg)
+    raise ValueError(f"model = {model!r}: must be one of 0 .. {len(MODEL_NAMES) - 1}")
+
+
+def python_fun(model: int, p: np.ndarray) -> Callable[[float, np.ndarray], list[float]]:
+    """``fun(t, y)`` for ``solve_ivp`` calling :func:`python_rhs`."""
+    params = [float(v) for v in p]
+
+    def fun(t, y):
+        return python_rhs(model, t, y.tolist(), params)
+
+    return fun
+
+
+def numba_fun(model: int, p: np.ndarray) -> Callable[[float, np.ndarray], np.ndarray]:
+    """``fun(t, y)`` for ``solve_ivp`` calling the jitted kernel ``models.rhs``."""
+    from .kernels.models import rhs
+
+    out = np.empty(MODEL_DIMS[model])
+
+    def fun(t, y):
+        rhs(model, t, y, p, out)
+        return out.copy()
+
+    return fun
+
+
+def time_cli(scene: Scene, *, repeats: int = 3) -> dict:
+    """Best wall time of ``chaospound simulate`` on the scene, in a subprocess.
+
+    An unmodified preset runs as ``chaospound simulate --preset NAME``; any
+    other scene is written to a temporary TOML file first. One untimed run
+    warms the numba cache.
+
+    Returns
+    -------
+    dict
+        ``argv`` (as shown), ``wall_s`` (best), ``all_s``, ``repeats``.
+    """
+    from .scene import list_presets, load_preset
+
+    command = _cli_command()
+    with tempfile.TemporaryDirectory(prefix="chaospound-bench-") as folder:
+        if scene.name in list_presets() and load_preset(scene.name) == scene:
+            args = ["--preset", scene.name]
+            shown = args
+        else:
+            path = os.path.join(folder, "scene.toml")
+            with open(path, "w", encoding="utf-8") as handle:
+                handle.write(scene.to_toml())
+            args = [path]
+            shown = [f"{scene.name}.toml"]
+        argv = command + ["simulate"] + args
+        times = [_run_once(argv) for _ in range(repeats + 1)][1:]
+    return {
+        "argv": [os.path.basename(command[0])] + command[1:] + ["simulate"] + shown,
+        "wall_s": min(times),
+        "all_s": times,
+        "repeats": repeats,
+    }
+
+
+def machine_info() -> dict:
+    """Processor, CPU count and library versions (for the report)."""
+    import numba
+    import scipy
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+            for line in handle:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "cpu_count": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba.__version__,
+    }
+
+
+# ============================================================== timing helpers
+def _entry(wall: float, steps: int, rhs_evals: int, repeats: int) -> dict:
+    return {
+        "wall_s": wall,
+        "steps": int(steps),
+        "rhs_evals": int(rhs_evals),
+        "us_per_step": 1e6 * wall / max(steps, 1),
+        "ns_per_rhs_eval": 1e9 * wall / max(rhs_evals, 1),
+        "repeats": repeats,
+    }
+
+
+def _time_solve_ivp(fun, y0, t_end, rtol, atol, repeats, budget_s, period) -> dict:
+    """Best of up to ``repeats`` ``solve_ivp(RK45)`` runs over [0, t_end]."""
+    from scipy.integrate import solve_ivp
+
+    solve_ivp(fun, (0.0, period), y0, method="RK45", rtol=rtol, atol=atol)  # warm-up
+    runs = []
+    spent = 0.0
+    while len(runs) < repeats and (not runs or spent < budget_s):
+        start = time.perf_counter()
+        sol = solve_ivp(fun, (0.0, t_end), y0, method="RK45", rtol=rtol, atol=atol)
+        wall = time.perf_counter() - start
+        spent += wall
+        if not sol.success:
+            raise SimulationError(f"solve_ivp (RK45) failed: {sol.message}")
+        runs.append((wall, sol))
+    wall, sol = min(runs, key=lambda pair: pair[0])
+    entry = _entry(wall, sol.t.size - 1, sol.nfev, len(runs))
+    entry["y_end"] = sol.y[:, -1]
+    return entry
+
+
+def _cli_command() -> list[str]:
+    """The ``chaospound`` console script next to this Python, else ``python -m chaospound``."""
+    script = os.path.join(os.path.dirname(sys.executable), "chaospound")
+    if os.path.isfile(script) and os.access(script, os.X_OK):
+        return [script]
+    found = shutil.which("chaospound")
+    return [found] if found else [sys.executable, "-m", "chaospound"]
+
+
+def _run_once(argv: list[str]) -> float:
+    start = time.perf_counter()
+    done = subprocess.run(argv, capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - start
+    if done.returncode != 0:
+        message = done.stderr.strip().splitlines()[-1:] or ["no message"]
+        raise SimulationError(f"{' '.join(argv)} failed ({done.returncode}): {message[0]}")
+    return wall
+
+
+def _targets(result: dict) -> dict:
+    goals = {
+        "chaospound us per step": (result["chaospound"]["us_per_step"], "<=", "us_per_step"),
+        "x wall vs Python rhs": (result["speedup"]["scipy-python"]["wall"], ">=",
+                                 "speedup_python"),
+        "x wall vs numba rhs": (result["speedup"]["scipy-numba"]["wall"], ">=", "speedup_numba"),
+    }  # fmt: skip
+    if result["cli"] is not None:
+        goals["CLI end to end, s"] = (result["cli"]["wall_s"], "<=", "cli_s")
+    return {
+        label: {
+            "value": value,
+            "comparison": cmp,
+            "target": TARGETS[key],
+            "met": bool(value <= TARGETS[key] if cmp == "<=" else value >= TARGETS[key]),
+        }
+        for label, (value, cmp, key) in goals.items()
+    }
+
+
+def _table(headers: Sequence[str], rows: Sequence[Sequence[str]], align: str) -> str:
+    lines = [list(headers)] + [list(row) for row in rows]
+    widths = [max(len(line[j]) for line in lines) for j in range(len(align))]
+    return "\n".join(
+        "  ".join(
+            cell.ljust(w) if a == "l" else cell.rjust(w)
+            for a, cell, w in zip(align, line, widths, strict=True)
+        ).rstrip()
+        for line in lines
+    )
+
+
+# ===================================================== pure-Python equations
+def _py_towers(y, p, ug, vg):
+    """12-state towers model (MODEL.md 2-3): two towers, line contact between them."""
+    x_a, vx_a, y_a, vy_a, th_a, vth_a, x_b, vx_b, y_b, vy_b, th_b, vth_b = y
+    y_c = p[P_Y_C]
+    y_ca = y_a + p[TOWER_A + T_EY]  # current CM heights
+    y_cb = y_b + p[P_Y_OFF] + p[TOWER_B + T_EY]
+    d_c = x_a - x_b - p[P_GAP] - th_a * (y_c - y_ca) + th_b * (y_c - y_cb)
+    force, moment = _py_line_contact(d_c, th_b - th_a, p[P_HALF_L], p[P_BETA], p[P_CHI])
+    q_tha = moment - (y_ca - y_c) * force
+    q_thb = -(moment - (y_cb - y_c) * force)
+    return _py_tower(
+        p, TOWER_A, x_a, vx_a, y_a, vy_a, th_a, vth_a, ug, vg, -force, -th_a * force, q_tha
+    ) + _py_tower(p, TOWER_B, x_b, vx_b, y_b, vy_b, th_b, vth_b, ug, vg,
+                  force, th_b * force, q_thb)  # fmt: skip
+
+
+def _py_tower_wall(y, p, ug, vg):
+    """6-state model: tower A against a rigid wall riding on the ground."""
+    x_a, vx_a, y_a, vy_a, th_a, vth_a = y
+    y_c = p[P_Y_C]
+    y_ca = y_a + p[TOWER_A + T_EY]
+    d_c = x_a - ug - p[P_GAP] - th_a * (y_c - y_ca)
+    force, moment = _py_line_contact(d_c, -th_a, p[P_HALF_L], p[P_BETA], p[P_CHI])
+    q_tha = moment - (y_ca - y_c) * force
+    return _py_tower(
+        p, TOWER_A, x_a, vx_a, y_a, vy_a, th_a, vth_a, ug, vg, -force, -th_a * force, q_tha
+    )
+
+
+def _py_pair(y, p, ug, vg):
+    """4-state translational pair (Chau & Wei 2001): point Hertz contact."""
+    x_a, vx_a, x_b, vx_b = y
+    d = x_a - x_b - p[P_GAP]
+    force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+    a, b = TOWER_A, TOWER_B
+    return [
+        vx_a,
+        -p[a + T_CX] * (vx_a - vg) - p[a + T_OM2] * (x_a - ug) - p[a + T_MU] * force,
+        vx_b,
+        -p[b + T_CX] * (vx_b - vg) - p[b + T_OM2] * (x_b - ug) + p[b + T_MU] * force,
+    ]
+
+
+def _py_wall(y, p, ug, vg):
+    """2-state model (Davis 1992): tower A's X against a ground-borne wall."""
+    x_a, vx_a = y
+    d = x_a - ug - p[P_GAP]
+    force = p[P_BETA] * d ** p[P_CHI] if d > 0.0 else 0.0
+    a = TOWER_A
+    return [
+        vx_a,
+        -p[a + T_CX] * (vx_a - vg) - p[a + T_OM2] * (x_a - ug) - p[a + T_MU] * force,
+    ]
+
+
+def _py_tower(p, base, x, vx, yy, vy, th, vth, ug, vg, qx, qy, qth):
+    """One tower's equations of motion (MODEL.md section 2), 6 derivatives."""
+    om2 = p[base + T_OM2]
+    mu = p[base + T_MU]
+    ex = p[base + T_EX]
+    ey = p[base + T_EY]
+    xr = x - ug
+    return [
+        vx,
+        -p[base + T_CX] * (vx - vg) - om2 * (xr + ey * th) + mu * qx,
+        vy,
+        -p[base + T_CY] * vy - om2 * (yy - ex * th) + mu * qy,
+        vth,
+        -p[base + T_CT] * vth
+        - p[base + T_KTH] * (ey * xr - ex * yy)
+        - p[base + T_OMT2] * th
+        + mu * qth / p[base + T_RHO2],
+    ]
+
+
+def _py_line_contact(d_c, slope, half_length, beta, chi):
+    """Force ``(beta/L) int d+^chi dy`` and moment ``(beta/L) int d+^chi (y - y_c) dy``."""
+    d_lo = d_c - slope * half_length
+    d_hi = d_c + slope * half_length
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0, 0.0
+    m0, m1 = _py_moments(chi, d_lo, d_hi)
+    return beta * m0, beta * 2.0 * half_length * m1
+
+
+def _py_moments(j, d_lo, d_hi):
+    """``int_0^1 d+^j ds`` and ``int_0^1 d+^j (s - 1/2) ds`` for d linear in s.
+
+    The three regimes of :func:`chaospound.kernels.contact.moments`: one end
+    penetrating, nearly parallel (binomial series), clearly skewed.
+    """
+    if d_lo <= 0.0 or d_hi <= 0.0:  # one end only: the penetrated sub-interval
+        if d_hi > 0.0:
+            pen, other, sign = d_hi, d_lo, 1.0
+        else:
+            pen, other, sign = d_lo, d_hi, -1.0
+        span = pen - other
+        m0 = (pen / span) * pen**j / (j + 1.0)
+        m1 = sign * m0 * (j * pen - (j + 2.0) * other) / (2.0 * (j + 2.0) * span)
+        return m0, m1
+    mean = 0.5 * (d_lo + d_hi)
+    half_diff = 0.5 * (d_hi - d_lo)
+    if abs(half_diff) < EPS_SERIES * mean:  # (1/2) int (1 + eps z)^j z^k dz, in powers of eps
+        eps = half_diff / mean
+        s0 = s1 = 0.0
+        coef = power = 1.0
+        for k in range(SERIES_MAX_TERMS):
+            term = coef * power
+            if k % 2 == 0:
+                s0 += term / (k + 1.0)
+            else:
+                s1 += term / (k + 2.0)
+            if k > 0 and abs(term) <= SERIES_RTOL * abs(s0):
+                break
+            coef *= (j - k) / (k + 1.0)
+            power *= eps
+        scale = mean**j
+        return scale * s0, 0.5 * scale * s1
+    delta = d_hi - d_lo  # skewed: antiderivatives at the ends
+    hi1 = d_hi ** (j + 1.0)
+    lo1 = d_lo ** (j + 1.0)
+    diff1 = (hi1 - lo1) / (j + 1.0)
+    diff2 = (hi1 * d_hi - lo1 * d_lo) / (j + 2.0)
+    return diff1 / delta, (diff2 - mean * diff1) / (delta * delta)
