@@ -14,18 +14,23 @@ the rate, and the penetration there decides whether two crossings happened.
 
 from numba import njit
 
-from .models import contact_ends
+from .models import contact_ends, contact_force_rate
 from .rk import dense_eval
 
 TIME_TOL = 1e-13  #: absolute tolerance of located event times (normalised time)
 MAX_ITER = 200  #: iteration cap of the root finders (bisection halves 2^-200)
+FORCE_RATE = 4  #: ``which`` code of the contact force's rate in :func:`end_value`
 
 
 @njit(cache=True)
 def end_value(model, method, q, y, t, h, theta, p, which, work, ends):
-    """``which`` = 0, 1: penetration d_lo, d_hi; 2, 3: their rates, at t + theta h."""
+    """At t + theta h: ``which`` = 0, 1 the penetrations d_lo, d_hi; 2, 3 their
+    rates; 4 the rate of the resultant contact force. The interpolated state is
+    left in ``work``."""
     dense_eval(method, q, y, h, theta, work)
     contact_ends(model, t + theta * h, work, p, ends)
+    if which == FORCE_RATE:
+        return contact_force_rate(model, t + theta * h, work, p, ends)
     return ends[which]
 
 

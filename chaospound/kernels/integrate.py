@@ -20,8 +20,15 @@ end of the window is followed to its release for its peak and duration.
 import numpy as np
 from numba import njit
 
-from .events import end_value, locate_extremum, locate_root
-from .models import base_model, contact_ends, contact_forces, penetration_rate, rhs
+from .events import FORCE_RATE, end_value, locate_extremum, locate_root
+from .models import (
+    base_model,
+    contact_ends,
+    contact_force_rate,
+    contact_forces,
+    penetration_rate,
+    rhs,
+)
 from .params import (
     MODEL_DIMS,
     P_HALF_L,
@@ -328,6 +335,7 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
                                     traj, n_traj, work, n)
 
         # process the events in time order (interpolated states when not landed)
+        peak_row = episode  # the episode running during this step, if recorded
         for i in range(n_ev):
             theta = ev_theta[i]
             end = ev_end[i]
@@ -354,6 +362,8 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
                     _record_onset(model, p, t_ev, k, period, t0, work, imp, imp_state, n_imp, n,
                                   ends_tmp)
                     episode = n_imp
+                    if peak_row < 0:
+                        peak_row = n_imp  # began inside this step (not landed on)
                     n_imp += 1
                 else:
                     episode = -1
@@ -365,10 +375,14 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
         if status != STATUS_OK:
             break
 
-        # peak penetration and force of the running episode
-        if episode >= 0 and active:
-            _update_peak(model, method, dense, dense_ready, y, y_new, t_here, h_try, p, ends_old,
-                         ends_new, imp, episode, work, ends_tmp, forces, two_ends)
+        # peak penetration and force of the episode that ran during this step
+        if peak_row >= 0:
+            if not dense_ready:
+                dense_prepare(method, model, t_here, h_try, y, f0, y_new, f_new, p, stage, dense)
+                stats[ST_RHS_EVALS] += DENSE_EVALS[method]
+                dense_ready = True
+            _update_peak(model, method, dense, y, y_new, t_here, h_try, p, ends_old, ends_new,
+                         imp, peak_row, work, ends_tmp, forces, two_ends)
 
         stats[ST_ACCEPTED] += 1
         tau += h_try
@@ -539,9 +553,16 @@ def _corner_label(model, p, s, plus_end):
 
 
 @njit(cache=True)
-def _update_peak(model, method, dense, dense_ready, y, y_new, t, h, p, ends_old, ends_new, imp,
-                 row, work, ends_tmp, forces, two_ends):
-    """Raise the episode's peak penetration and force with this step's maxima."""
+def _update_peak(model, method, dense, y, y_new, t, h, p, ends_old, ends_new, imp, row, work,
+                 ends_tmp, forces, two_ends):
+    """Raise an episode's peak penetration and peak force with this step's maxima.
+
+    Candidates: the step's end, the interior maxima of each end penetration
+    (where its rate turns from + to -) and, for the line contact, the interior
+    maximum of the force itself (where its analytic rate turns), all located on
+    the step's dense output. A graze shorter than one step is covered: its
+    maximum lies inside the step between the landed onset and release.
+    """
     pen = max(ends_new[0], ends_new[1])
     if pen > imp[row, IMP_PEAK_PEN]:
         imp[row, IMP_PEAK_PEN] = pen
@@ -549,15 +570,22 @@ def _update_peak(model, method, dense, dense_ready, y, y_new, t, h, p, ends_old,
     if force > imp[row, IMP_PEAK_FORCE]:
         imp[row, IMP_PEAK_FORCE] = force
     for end in range(2 if two_ends else 1):
-        if ends_old[end + 2] > 0.0 and ends_new[end + 2] < 0.0 and (
-                ends_old[end] > 0.0 or ends_new[end] > 0.0):
-            if not dense_ready:
-                return  # no interpolant (the step was landed on an event): ends only
+        if ends_old[end + 2] > 0.0 and ends_new[end + 2] < 0.0:
             theta = locate_extremum(model, method, dense, y, t, h, p, end, ends_old[end + 2],
                                     ends_new[end + 2], work, ends_tmp)
             d_m = end_value(model, method, dense, y, t, h, theta, p, end, work, ends_tmp)
             if d_m > imp[row, IMP_PEAK_PEN]:
                 imp[row, IMP_PEAK_PEN] = d_m
+            f_m = contact_forces(model, t + theta * h, work, p, forces)
+            if f_m > imp[row, IMP_PEAK_FORCE]:
+                imp[row, IMP_PEAK_FORCE] = f_m
+    if two_ends:
+        rate_old = contact_force_rate(model, t, y, p, ends_old)
+        rate_new = contact_force_rate(model, t + h, y_new, p, ends_new)
+        if rate_old > 0.0 and rate_new < 0.0:
+            theta = locate_root(model, method, dense, y, t, h, p, FORCE_RATE, 0.0, rate_old,
+                                1.0, rate_new, work, ends_tmp)
+            end_value(model, method, dense, y, t, h, theta, p, 0, work, ends_tmp)
             f_m = contact_forces(model, t + theta * h, work, p, forces)
             if f_m > imp[row, IMP_PEAK_FORCE]:
                 imp[row, IMP_PEAK_FORCE] = f_m

@@ -24,7 +24,7 @@ with ``I0 = (beta/L) int d+^chi dy`` and ``F1 = (beta/L) int d+^chi (y - y_c) dy
 import numpy as np
 from numba import njit
 
-from .contact import line_contact, line_potential
+from .contact import line_contact, line_contact_gradient, line_potential
 from .params import (
     DUFFING,
     LORENZ,
@@ -238,6 +238,26 @@ def contact_forces(model, t, y, p, q_out):
         if model == PAIR:
             q_out[3] = force
     return -q_out[0]
+
+
+@njit(cache=True)
+def contact_force_rate(model, t, y, p, ends):
+    """Time derivative of the resultant contact force ``-Q_XA``.
+
+    ``ends`` must hold :func:`contact_ends` at (t, y). The force depends on the
+    centre penetration and the slope, whose rates follow from the end rates:
+    ``dF/dt = F_c (r_lo + r_hi) / 2 + F_s (r_hi - r_lo) / L``.
+    """
+    model = base_model(model)
+    if ends[0] <= 0.0 and ends[1] <= 0.0:
+        return 0.0
+    beta = p[P_BETA]
+    chi = p[P_CHI]
+    if model == TOWERS or model == TOWER_WALL:
+        half = p[P_HALF_L]
+        fc, fs, _, _ = line_contact_gradient(ends[0], ends[1], half, beta, chi)
+        return fc * 0.5 * (ends[2] + ends[3]) + fs * (ends[3] - ends[2]) / (2.0 * half)
+    return beta * chi * power(ends[0], chi - 1.0) * ends[2]
 
 
 @njit(cache=True)
