@@ -22,7 +22,15 @@ _SCENE_EXPORTS = (
     "save_scene",
 )
 
-__all__ = ["__version__", *_SCENE_EXPORTS]
+_OTHER_EXPORTS = {
+    "simulate": "chaospound.simulate",
+    "open_sweep": "chaospound.store",
+    "run_sweep": "chaospound.sweep",
+    "lyapunov_spectrum": "chaospound.dynamics.lyapunov",
+    "classify": "chaospound.dynamics.classify",
+}
+
+__all__ = ["__version__", *_SCENE_EXPORTS, *_OTHER_EXPORTS]
 
 
 def __getattr__(name: str) -> object:
@@ -30,4 +38,8 @@ def __getattr__(name: str) -> object:
         from chaospound import scene
 
         return getattr(scene, name)
+    if name in _OTHER_EXPORTS:
+        import importlib
+
+        return getattr(importlib.import_module(_OTHER_EXPORTS[name]), name)
     raise AttributeError(f"module 'chaospound' has no attribute {name!r}")

@@ -106,7 +106,7 @@ def test_preset_specifics(name, r, e_ay, opponent, model, swept):
     assert scene.tower_A.e_y == pytest.approx(e_ay, rel=1e-15, abs=0)
     assert scene.opponent == opponent
     assert scene.model_name == model
-    assert scene.sweep == ((("period_ratio", "0.3:2.0:1000"),) if swept else ())
+    assert scene.sweep == ((("period_ratio", "0.3:2.0#1000"),) if swept else ())
 
 
 def test_unknown_preset_lists_available():
@@ -317,7 +317,7 @@ def test_toml_round_trip_through_text_and_file(tmp_path):
     save_scene(scene, path)
     loaded = load_scene(path)
     assert loaded == scene and loaded.initial_state == tuple(state)
-    assert loaded.sweep == (("period_ratio", "0.3:2.0:1000"),)
+    assert loaded.sweep == (("period_ratio", "0.3:2.0#1000"),)
 
 
 def test_malformed_toml_names_file(tmp_path):

@@ -1,0 +1,672 @@
+"""Batch bifurcation scans over one or two scene parameters, stored in HDF5.
+
+A sweep is a grid over one or two parameters of a scene (``period_ratio``,
+``gap``, ``ecc_y_A``, ``beta``, ...). Every grid point is run to steady state
+(the scene's transient and record windows), its impacts, stroboscopic points
+and regime are stored, optionally with Lyapunov exponents.
+
+Branches and chains
+    Without continuation every point starts from the scene's initial state
+    (the paper's fresh start from rest): branch "fresh", one chain per point.
+    With continuation each point starts from the previous point's last
+    stroboscopic state (at the section, so the forcing phase is exact):
+    branch "forward" visits the last axis upwards, "backward" downwards, "both"
+    stores the two branches side by side (hysteresis, coexisting attractors).
+    In 2-D, every row along the last axis is one chain.
+
+Determinism
+    A point's result depends only on its parameters and its starting state,
+    never on the worker that ran it; results are written in the branch's
+    visiting order (out-of-order arrivals wait in a small buffer), so files
+    from 1 or N workers, or from an interrupted and resumed run, are
+    identical apart from the timing fields.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing as mp
+import re
+import time
+from collections.abc import Iterable, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import __version__
+from .scene import PARAMETERS, SHORTHANDS, Scene, SceneError
+from .store import PointResult, SweepWriter
+
+__all__ = [
+    "Axis",
+    "SweepInterrupted",
+    "SweepSpec",
+    "SweepSummary",
+    "parse_axis",
+    "run_sweep",
+]
+
+CONTINUATIONS = ("none", "forward", "backward", "both")
+CLASSIFY_MODES = ("window", "full")
+WINDOW_TOL = 1e-2  #: default stroboscopic tolerance of the window classification
+MAX_POINTS = 10_000_000
+
+
+class SweepInterrupted(Exception):
+    """Raised after a Ctrl-C: the file is closed and valid, ``--resume`` finishes it."""
+
+    def __init__(self, done: int, total: int, path: str) -> None:
+        super().__init__(f"interrupted after {done} of {total} points; "
+                         f"finish with: chaospound sweep ... -o {path} --resume")
+        self.done = done
+        self.total = total
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One swept parameter and its values."""
+
+    name: str
+    values: np.ndarray
+    spec: str
+
+    def __len__(self) -> int:
+        return int(self.values.shape[0])
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """What to sweep and how.
+
+    Attributes
+    ----------
+    axes : tuple of Axis
+        One or two axes; the last one is the continuation direction.
+    continuation : {"none", "forward", "backward", "both"}
+    lyapunov : int
+        Exponents per point: 0 none, -1 the full spectrum, k the k largest.
+    lyapunov_cycles : int
+        Periods averaged for the exponents (after 10 periods of alignment).
+    classify : {"window", "full"}
+        "window": the regime from the point's own record window (the scene's
+        transient and record cycles, e.g. the paper's 40 + 8), with the
+        stroboscopic tolerance ``window_tol``: what such a window can resolve
+        (MODEL.md 5: 1-2 % of the transient is left after 40 cycles). Aperiodic
+        points are chaotic or quasi-periodic only with exponents (``lyapunov``),
+        else "unresolved". "full": the adaptive classifier
+        (:func:`chaospound.dynamics.classify.classify`) per point: its own
+        converged transient, tolerance 1e-5 and largest exponent; slower.
+    window_tol : float
+        Relative stroboscopic mismatch accepted as periodic in "window" mode.
+    """
+
+    axes: tuple[Axis, ...]
+    continuation: str = "none"
+    lyapunov: int = 0
+    lyapunov_cycles: int = 100
+    classify: str = "window"
+    window_tol: float = WINDOW_TOL
+
+    def __post_init__(self) -> None:
+        if not 1 <= len(self.axes) <= 2:
+            raise ValueError(f"{len(self.axes)} swept parameters: give one or two --param")
+        names = [a.name for a in self.axes]
+        if len(set(names)) != len(names):
+            raise ValueError(f"parameter {names[0]!r} swept twice")
+        if self.continuation not in CONTINUATIONS:
+            raise ValueError(f"continuation = {self.continuation!r}: must be one of "
+                             f"{', '.join(CONTINUATIONS)}")
+        if self.lyapunov_cycles < 10:
+            raise ValueError(f"lyapunov_cycles = {self.lyapunov_cycles}: must be >= 10")
+        if self.classify not in CLASSIFY_MODES:
+            raise ValueError(f"classify = {self.classify!r}: must be one of "
+                             f"{', '.join(CLASSIFY_MODES)}")
+        if not 0.0 < self.window_tol < 1.0:
+            raise ValueError(f"window_tol = {self.window_tol}: must be in (0, 1)")
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(a) for a in self.axes)
+
+    @property
+    def n_points(self) -> int:
+        return int(np.prod(self.shape))
+
+    @property
+    def branches(self) -> tuple[str, ...]:
+        if self.continuation == "none":
+            return ("fresh",)
+        if self.continuation == "both":
+            return ("forward", "backward")
+        return (self.continuation,)
+
+    def to_json(self) -> str:
+        return json.dumps({
+            "parameters": [a.name for a in self.axes],
+            "specs": [a.spec for a in self.axes],
+            "values": [a.values.tolist() for a in self.axes],
+            "continuation": self.continuation,
+            "branches": list(self.branches),
+            "lyapunov": self.lyapunov,
+            "lyapunov_cycles": self.lyapunov_cycles,
+            "classify": self.classify,
+            "window_tol": self.window_tol,
+        })
+
+    def point_values(self, index: int) -> dict[str, float]:
+        """Parameter values of grid point ``index`` (row-major)."""
+        coords = np.unravel_index(index, self.shape)
+        return {a.name: float(a.values[c]) for a, c in zip(self.axes, coords, strict=True)}
+
+    def chains(self, branch: str) -> list[list[int]]:
+        """Chains of grid indices in visiting order; points of a chain run in sequence."""
+        n = self.n_points
+        if branch == "fresh":
+            return [[i] for i in range(n)]
+        inner = self.shape[-1]
+        rows = [list(range(r * inner, (r + 1) * inner)) for r in range(n // inner)]
+        if branch == "backward":
+            rows = [row[::-1] for row in rows]
+        return rows
+
+
+@dataclass
+class SweepSummary:
+    """What a sweep did."""
+
+    path: str
+    points: int
+    computed: int
+    regimes: dict[str, int]
+    failed: int
+    wall_s: float
+    workers: int
+    messages: list[str] = field(default_factory=list)
+
+    @property
+    def points_per_second(self) -> float:
+        return self.computed / self.wall_s if self.wall_s > 0 else float("nan")
+
+    def format(self) -> str:
+        counts = ", ".join(f"{k} {v}" for k, v in sorted(self.regimes.items()) if v)
+        lines = [
+            f"{self.path}: {self.computed} points computed ({self.points} in the grid) "
+            f"in {self.wall_s:.2f} s with {self.workers} worker(s), "
+            f"{self.points_per_second:.1f} points/s",
+            f"regimes: {counts or 'none'}; failed: {self.failed}",
+        ]
+        lines += [f"  failed: {m}" for m in self.messages[:5]]
+        return "\n".join(lines)
+
+
+# ----------------------------------------------------------------- grid parsing
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def parse_axis(text: str, scene: Scene | None = None) -> Axis:
+    """Parse ``name=GRID`` where GRID is ``start:stop:step``, ``start:stop#count``
+    or a comma-separated list of values.
+
+    ``start:stop:step`` includes ``stop`` when it lies on the grid (to within
+    1e-9 of a step); ``start:stop#count`` is ``numpy.linspace(start, stop, count)``.
+    """
+    if "=" not in text:
+        raise ValueError(f"--param {text!r}: expected NAME=GRID, e.g. period_ratio=0.3:2.0:0.005")
+    name, grid = (s.strip() for s in text.split("=", 1))
+    return make_axis(name, grid, scene)
+
+
+def make_axis(name: str, grid: str, scene: Scene | None = None) -> Axis:
+    """An Axis from a parameter name and a grid string (see :func:`parse_axis`)."""
+    if name not in PARAMETERS and name not in SHORTHANDS:
+        import difflib
+
+        close = difflib.get_close_matches(name, list(PARAMETERS) + list(SHORTHANDS), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise ValueError(f"unknown sweep parameter {name!r}{hint}")
+    values = _grid_values(name, str(grid).strip())
+    if values.size == 0:
+        raise ValueError(f"{name}={grid}: empty range")
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{name}={grid}: non-finite values")
+    if scene is not None:
+        for v in (values[0], values[-1]) if values.size > 1 else values[:1]:
+            try:
+                scene.with_params(**{name: float(v)})
+            except SceneError as exc:
+                raise ValueError(f"sweep {name}={grid}: {exc}") from None
+    return Axis(name=name, values=values, spec=str(grid).strip())
+
+
+def _grid_values(name: str, grid: str) -> np.ndarray:
+    m = re.fullmatch(rf"({_NUMBER}):({_NUMBER}):({_NUMBER})", grid)
+    if m:
+        start, stop, step = (float(g) for g in m.groups())
+        if step == 0 or (stop - start) * step < 0:
+            raise ValueError(f"{name}={grid}: empty range (step {step} does not lead from "
+                             f"{start} to {stop})")
+        count = math.floor((stop - start) / step + 1e-9) + 1
+        if count > MAX_POINTS:
+            raise ValueError(f"{name}={grid}: {count} points, more than {MAX_POINTS}")
+        return start + step * np.arange(count)
+    m = re.fullmatch(rf"({_NUMBER}):({_NUMBER})#(\d+)", grid)
+    if m:
+        start, stop, count = float(m.group(1)), float(m.group(2)), int(m.group(3))
+        if count < 1:
+            raise ValueError(f"{name}={grid}: empty range (count 0)")
+        if count > MAX_POINTS:
+            raise ValueError(f"{name}={grid}: {count} points, more than {MAX_POINTS}")
+        return np.linspace(start, stop, count)
+    parts = [p.strip() for p in grid.split(",") if p.strip()]
+    try:
+        return np.array([float(p) for p in parts])
+    except ValueError:
+        raise ValueError(
+            f"{name}={grid}: not a grid; use start:stop:step, start:stop#count or "
+            "v1,v2,...") from None
+
+
+# ----------------------------------------------------------------- the driver
+
+
+def run_sweep(
+    scene: Scene,
+    spec: SweepSpec,
+    path,
+    *,
+    workers: int = 1,
+    resume: bool = False,
+    overwrite: bool = False,
+    progress: bool = True,
+    chunk: int | None = None,
+    client=None,
+) -> SweepSummary:
+    """Run a sweep into an HDF5 store (see :mod:`chaospound.store` for the schema).
+
+    Parameters
+    ----------
+    scene : Scene
+        The base scene; each point overrides the swept parameters.
+    spec : SweepSpec
+        Axes, continuation and Lyapunov settings.
+    path : str or Path
+        Output file; refused if it exists unless ``resume`` or ``overwrite``.
+    workers : int
+        Local worker processes (ignored with a Dask ``client``).
+    resume : bool
+        Finish an interrupted file of the same sweep, keeping its points.
+    overwrite : bool
+        Replace an existing file.
+    progress : bool
+        Show a progress bar (tqdm, on stderr).
+    chunk : int, optional
+        Points per task (default: sized from the number of points and workers).
+    client : distributed.Client, optional
+        Run the tasks on a Dask cluster (see :mod:`chaospound.distributed`).
+
+    Returns
+    -------
+    SweepSummary
+
+    Raises
+    ------
+    SweepInterrupted
+        On Ctrl-C, after closing the file cleanly.
+    """
+    if workers < 1:
+        raise ValueError(f"workers = {workers}: must be >= 1")
+    model_id = scene.model_id()
+    n_state = len(scene.initial_vector(model_id))
+    n_exponents = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
+    if n_exponents > n_state:
+        raise ValueError(f"--lyapunov {spec.lyapunov}: the {scene.model_name} model has only "
+                         f"{n_state} exponents")
+    from .scene import STATE_NAMES
+
+    meta = {
+        "chaospound_version": __version__,
+        "scene": scene.to_toml(),
+        "scene_resolved": json.dumps(scene.to_dict()),
+        "sweep": spec.to_json(),
+        "model": scene.model_name,
+        "state_names": json.dumps(list(STATE_NAMES[model_id])),
+    }
+    grid = {a.name: a.values for a in spec.axes}
+    chains = {b: spec.chains(b) for b in spec.branches}
+    orders = {b: np.concatenate([np.asarray(c, dtype=np.int64) for c in chains[b]])
+              for b in spec.branches}
+    if chunk is None:
+        per_worker = max(1, spec.n_points // (max(workers, 1) * 8))
+        chunk = int(min(32, per_worker))
+    chunk = max(1, int(chunk))
+
+    started = time.perf_counter()
+    backend = _make_backend(client, workers, scene, spec)
+    try:
+        writer = SweepWriter(path, meta, grid, orders, n_state, n_exponents, resume=resume,
+                             overwrite=overwrite)
+    except BaseException:
+        backend.close()
+        raise
+    try:
+        plan = _Plan(spec, chains, writer, chunk)
+        summary = _execute(plan, backend, writer, progress, str(path))
+    finally:
+        writer.close()
+        backend.close()
+    summary.wall_s = time.perf_counter() - started
+    summary.workers = backend.workers
+    return summary
+
+
+# ---------------------------------------------------------------- scheduling
+
+
+@dataclass
+class _Task:
+    branch: str
+    key: tuple[int, int]  # (chain, segment): the branch's flush order
+    indices: list[int]
+    start_state: np.ndarray | None
+    continuation: bool
+    last_of_chain: bool
+
+
+class _Plan:
+    """Which points remain, cut into tasks, and the order results are written in."""
+
+    def __init__(self, spec: SweepSpec, chains: dict, writer: SweepWriter, chunk: int) -> None:
+        self.spec = spec
+        self.chunk = chunk
+        self.ready: list[_Task] = []
+        self.flush_order: dict[str, list[tuple[int, int]]] = {}
+        self.remaining: dict[tuple[str, int], list[int]] = {}
+        self.total = 0
+        for branch, branch_chains in chains.items():
+            pending = writer.pending(branch)
+            keys = []
+            if branch == "fresh":
+                todo = [c[0] for c in branch_chains if pending[c[0]]]
+                for s in range(0, len(todo), chunk):
+                    key = (s // chunk, 0)
+                    keys.append(key)
+                    self.ready.append(_Task(branch, key, todo[s:s + chunk], None, False, True))
+                self.total += len(todo)
+            else:
+                for c, chain in enumerate(branch_chains):
+                    todo = [i for i in chain if pending[i]]
+                    if not todo:
+                        continue
+                    first = chain.index(todo[0])
+                    state = writer.final_state(branch, chain[first - 1]) if first > 0 else None
+                    n_seg = math.ceil(len(todo) / chunk)
+                    keys += [(c, s) for s in range(n_seg)]
+                    self.remaining[(branch, c)] = todo
+                    self.total += len(todo)
+                    self.ready.append(self._segment(branch, c, 0, state))
+            self.flush_order[branch] = keys
+
+    def _segment(self, branch, chain, seg, state) -> _Task:
+        todo = self.remaining[(branch, chain)]
+        part = todo[seg * self.chunk:(seg + 1) * self.chunk]
+        last = (seg + 1) * self.chunk >= len(todo)
+        return _Task(branch, (chain, seg), part, state, True, last)
+
+    def follow_up(self, task: _Task, results: list[PointResult]) -> _Task | None:
+        """The next segment of a continuation chain, started from the last state."""
+        if not task.continuation or task.last_of_chain:
+            return None
+        last = results[-1]
+        state = last.final_state if last.status == 1 else None
+        return self._segment(task.branch, task.key[0], task.key[1] + 1, state)
+
+
+def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: str):
+    from .store import REGIMES
+
+    regimes = dict.fromkeys(REGIMES[1:], 0)
+    messages: list[str] = []
+    failed = 0
+    done = 0
+    buffers: dict[str, dict] = {b: {} for b in plan.flush_order}
+    cursor = dict.fromkeys(plan.flush_order, 0)
+    bar = _progress_bar(plan.total, progress)
+    queue = list(plan.ready)
+    in_flight = {}
+    limit = 2 * backend.workers + 2
+    try:
+        while queue or in_flight:
+            while queue and len(in_flight) < limit:
+                task = queue.pop(0)
+                in_flight[backend.submit(task)] = task
+            finished = backend.wait_some(list(in_flight))
+            for fut in finished:
+                task = in_flight.pop(fut)
+                results = backend.result(fut)
+                nxt = plan.follow_up(task, results)
+                if nxt is not None:
+                    queue.insert(0, nxt)
+                buffers[task.branch][task.key] = results
+                for r in results:
+                    regimes[r.regime] = regimes.get(r.regime, 0) + 1
+                    if r.status == 2:
+                        failed += 1
+                        if len(messages) < 20:
+                            messages.append(f"point {r.index}: {r.message}")
+                done += len(results)
+                if bar is not None:
+                    bar.update(len(results))
+                    bar.set_postfix_str(_postfix(regimes, failed), refresh=False)
+            for branch in buffers:
+                order = plan.flush_order[branch]
+                batch = []
+                while cursor[branch] < len(order) and order[cursor[branch]] in buffers[branch]:
+                    batch += buffers[branch].pop(order[cursor[branch]])
+                    cursor[branch] += 1
+                writer.write(branch, batch)
+    except KeyboardInterrupt:
+        backend.abort()
+        if bar is not None:
+            bar.close()
+        raise SweepInterrupted(done, plan.total, path) from None
+    if bar is not None:
+        bar.close()
+    return SweepSummary(path=path, points=plan.spec.n_points * len(plan.spec.branches),
+                        computed=done, regimes=regimes, failed=failed, wall_s=0.0, workers=0,
+                        messages=messages)
+
+
+def _postfix(regimes: dict, failed: int) -> str:
+    short = {"periodic": "per", "group-periodic": "grp", "chaotic": "cha",
+             "quasi-periodic": "qp", "none": "none", "unresolved": "?"}
+    parts = [f"{short[k]} {v}" for k, v in regimes.items() if v and k in short]
+    if failed:
+        parts.append(f"failed {failed}")
+    return " ".join(parts)
+
+
+def _progress_bar(total: int, enabled: bool):
+    if not enabled or total == 0:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="pt", desc="sweep", dynamic_ncols=True, smoothing=0.05)
+
+
+# ------------------------------------------------------------------ backends
+
+
+class _LocalBackend:
+    """Worker processes on this machine (or in-process for one worker)."""
+
+    def __init__(self, workers: int, scene: Scene, spec: SweepSpec) -> None:
+        self.workers = workers
+        self._scene = scene
+        self._spec = spec
+        self._pool = None
+        if workers > 1:
+            ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
+            self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                             initializer=_init_worker, initargs=(scene, spec))
+
+    def submit(self, task: _Task):
+        if self._pool is None:
+            return _Immediate(run_task(self._scene, self._spec, task.indices, task.start_state,
+                                       task.continuation))
+        return self._pool.submit(_run_in_worker, task.indices, task.start_state,
+                                 task.continuation)
+
+    def wait_some(self, futures):
+        if self._pool is None:
+            return futures
+        done, _ = wait(futures, return_when=FIRST_COMPLETED)
+        return list(done)
+
+    def result(self, fut):
+        return fut.result()
+
+    def abort(self) -> None:
+        if self._pool is not None:
+            for proc in list(getattr(self._pool, "_processes", {}).values()):
+                proc.terminate()
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+
+class _Immediate:
+    """A finished 'future' for the in-process backend."""
+
+    def __init__(self, value) -> None:
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+def _make_backend(client, workers: int, scene: Scene, spec: SweepSpec):
+    if client is not None:
+        from .distributed import DaskBackend
+
+        return DaskBackend(client, scene, spec)
+    return _LocalBackend(workers, scene, spec)
+
+
+_WORKER: dict = {}
+
+
+def _init_worker(scene: Scene, spec: SweepSpec) -> None:
+    _WORKER["scene"] = scene
+    _WORKER["spec"] = spec
+
+
+def _run_in_worker(indices, start_state, continuation):
+    return run_task(_WORKER["scene"], _WORKER["spec"], indices, start_state, continuation)
+
+
+# ------------------------------------------------------------------ one point
+
+
+def run_task(scene: Scene, spec: SweepSpec, indices: Sequence[int],
+             start_state: np.ndarray | None, continuation: bool) -> list[PointResult]:
+    """Run grid points in order; with continuation each starts from the previous one."""
+    results = []
+    state = start_state
+    for index in indices:
+        result = run_point(scene, spec, int(index), state if continuation else None)
+        results.append(result)
+        if continuation:
+            state = result.final_state if result.status == 1 else None
+    return results
+
+
+def run_point(scene: Scene, spec: SweepSpec, index: int,
+              start_state: np.ndarray | None = None) -> PointResult:
+    """Steady run, classification and optional exponents of one grid point."""
+    from .dynamics.classify import classify, classify_sequence
+    from .dynamics.lyapunov import lyapunov_spectrum
+    from .simulate import SimulationError, simulate
+
+    started = time.perf_counter()
+    n_state = len(scene.initial_vector())
+    n_exp = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
+    try:
+        point = scene.with_params(**spec.point_values(index))
+        sim = simulate(point, initial_state=start_state,
+                       start_at_section=start_state is not None)
+        exps = errs = None
+        if n_exp:
+            spectrum = lyapunov_spectrum(point, k=n_exp, transient=0,
+                                         initial_state=sim.strobe.state[-1],
+                                         cycles=spec.lyapunov_cycles, tangent_transient=10)
+            exps, errs = spectrum.exponents, spectrum.errors
+        imp = sim.impacts
+        if spec.classify == "full":
+            regime = classify(point)
+        else:
+            regime = classify_sequence(
+                sim.strobe.state, imp.cycle, imp.phase, imp.velocity, imp.labels,
+                max_period=max(1, sim.record // 2), tol=spec.window_tol,
+                exponent=None if exps is None else float(exps[0]),
+                exponent_error=None if errs is None else float(errs[0]),
+            )
+        stats = sim.stats
+        return PointResult(
+            index=index, status=1, message="", regime=regime.regime,
+            impacts_per_period=_int_or(regime.impacts_per_period),
+            period_cycles=_int_or(regime.period_cycles),
+            strobe_mismatch=float(regime.strobe_mismatch),
+            zero_one=_float_or(regime.zero_one),
+            max_exponent=np.nan if exps is None else float(exps[0]),
+            max_exponent_error=np.nan if errs is None else float(errs[0]),
+            exponents=exps, final_state=sim.strobe.state[-1].copy(),
+            steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
+            wall_s=time.perf_counter() - started,
+            impacts={"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
+                     "corner": imp.corner.astype(np.int8),
+                     "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
+                     "duration": imp.duration},
+            strobe=sim.strobe.state,
+        )
+    except (SimulationError, SceneError, ValueError, FloatingPointError, ZeroDivisionError,
+            OverflowError) as exc:
+        return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
+
+
+def _failed_point(index: int, n_state: int, message: str, started: float) -> PointResult:
+    empty = np.zeros(0)
+    return PointResult(
+        index=index, status=2, message=message.splitlines()[0] if message else "failed",
+        regime="failed", impacts_per_period=-1, period_cycles=-1, strobe_mismatch=np.nan,
+        zero_one=np.nan, max_exponent=np.nan, max_exponent_error=np.nan, exponents=None,
+        final_state=np.full(n_state, np.nan), steps=0, rejected=0, rhs_evals=0,
+        wall_s=time.perf_counter() - started,
+        impacts={"time": empty, "phase": empty, "velocity": empty,
+                 "corner": np.zeros(0, dtype=np.int8), "peak_penetration": empty,
+                 "peak_force": empty, "duration": empty},
+        strobe=np.zeros((0, n_state)),
+    )
+
+
+def _int_or(value, default: int = -1) -> int:
+    return default if value is None else int(value)
+
+
+def _float_or(value, default: float = np.nan) -> float:
+    return default if value is None else float(value)
+
+
+def axes_from_scene(scene: Scene) -> list[Axis]:
+    """The sweep stored in a preset's [sweep] table, as axes."""
+    return [make_axis(name, grid, scene) for name, grid in scene.sweep]
+
+
+def parse_axes(texts: Iterable[str], scene: Scene) -> list[Axis]:
+    return [parse_axis(t, scene) for t in texts]
