@@ -1095,7 +1095,8 @@ def _normalise_sweep(sweep: object) -> tuple[tuple[str, str], ...]:
             raise _unknown(name, what="sweep parameter")
         if not isinstance(grid, str):
             raise SceneError(
-                f"sweep {name} = {_show(grid)}: the grid must be a string, e.g. '0.3:2.0#1000' or '0.3:2.0:0.005'"
+                f"sweep {name} = {_show(grid)}: the grid must be a string, "
+                "e.g. '0.3:2.0#1000' or '0.3:2.0:0.005'"
             )
         out.append((name, grid))
     return tuple(out)

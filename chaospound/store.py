@@ -124,8 +124,8 @@ class SweepWriter:
         self.n_exponents = n_exponents
         self._started = time.perf_counter()
         if self.path.exists() and not (resume or overwrite):
-            raise SweepStoreError(
-                f"{self.path}: file exists (use --resume to finish it or --overwrite to replace it)")
+            raise SweepStoreError(f"{self.path}: file exists (use --resume to finish it or "
+                                  "--overwrite to replace it)")
         if resume and self.path.exists():
             self.file = _open_for_append(self.path)
             _check_same_sweep(self.file, self.path, meta, grid, branches)
