@@ -68,30 +68,37 @@ def rhs(model, t, y, p, out):
     k tangent vectors stored after it (``y`` of length n (1 + k)): the
     variational equations ``V' = J V`` of MODEL.md section 5.
     """
+    ug, vg = ground(t, p)
+    rhs_grounded(model, t, y, p, ug, vg, out)
+
+
+@njit(cache=True)
+def rhs_grounded(model, t, y, p, ug, vg, out):
+    """:func:`rhs` with the ground motion ``(u_g, u_g')`` at t given.
+
+    Lets a stepper that evaluates twice at one time (Dormand-Prince's last
+    stage and its FSAL stage) compute the sine and cosine once.
+    """
     if model >= TANGENT:
         base = model - TANGENT
-        _rhs_base(base, t, y, p, out)
+        _rhs_base(base, t, y, p, ug, vg, out)
         n = MODEL_DIMS[base]
         lin = linearize(base, t, y, p)
         for i in range(1, y.shape[0] // n):
             apply_jvp(base, p, lin, y[i * n:(i + 1) * n], out[i * n:(i + 1) * n])
     else:
-        _rhs_base(model, t, y, p, out)
+        _rhs_base(model, t, y, p, ug, vg, out)
 
 
 @njit(cache=True)
-def _rhs_base(model, t, y, p, out):
+def _rhs_base(model, t, y, p, ug, vg, out):
     if model == TOWERS:
-        ug, vg = ground(t, p)
         _rhs_towers(y, p, ug, vg, out)
     elif model == PAIR:
-        ug, vg = ground(t, p)
         _rhs_pair(y, p, ug, vg, out)
     elif model == TOWER_WALL:
-        ug, vg = ground(t, p)
         _rhs_tower_wall(y, p, ug, vg, out)
     elif model == WALL:
-        ug, vg = ground(t, p)
         _rhs_wall(y, p, ug, vg, out)
     elif model == LORENZ:
         lorenz_rhs(t, y, p, out)
@@ -142,7 +149,10 @@ def contact_ends(model, t, y, p, out):
         out[2] = 0.0
         out[3] = 0.0
         return
-    ug, vg = ground(t, p)
+    if model == TOWERS:
+        ug = 0.0  # the towers' penetration does not involve the ground
+    else:
+        ug, vg = ground(t, p)
     if model == TOWERS or model == TOWER_WALL:
         half = p[P_HALF_L]
         y_c = p[P_Y_C]

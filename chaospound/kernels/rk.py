@@ -46,7 +46,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .models import rhs
+from .models import rhs, rhs_grounded
+from .powers import ground
 
 # ------------------------------------------------------------------ methods
 DOPRI5 = 0
@@ -618,11 +619,12 @@ def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
     for i in range(n):
         y_new[i] = y[i] + h * (_A61 * K[0, i] + _A62 * K[1, i] + _A63 * K[2, i]
                                + _A64 * K[3, i] + _A65 * K[4, i])
-    rhs(model, t + h, y_new, p, K[5])
+    ug, vg = ground(t + h, p)  # stages 6 and 7 share the time t + h
+    rhs_grounded(model, t + h, y_new, p, ug, vg, K[5])
     for i in range(n):
         y_new[i] = y[i] + h * (_B1 * K[0, i] + _B3 * K[2, i] + _B4 * K[3, i]
                                + _B5 * K[4, i] + _B6 * K[5, i])
-    rhs(model, t + h, y_new, p, f_new)
+    rhs_grounded(model, t + h, y_new, p, ug, vg, f_new)
     total = 0.0
     for i in range(n):
         K[6, i] = f_new[i]
