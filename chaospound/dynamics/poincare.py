@@ -1,0 +1,211 @@
+"""Poincare sections: stroboscopic and impact sections (MODEL.md section 5).
+
+* :func:`stroboscopic_section`: the state at t = (phase + k) T for
+  k = transient .. transient + cycles (cycles + 1 states), T the excitation
+  period. A periodic response of period P cycles gives P distinct points.
+* :func:`impact_section`: the state at the onset of every impact of a run,
+  with the corner labels.
+
+Both return a :class:`Section` of plain arrays. Nothing here knows about
+files or plots.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..kernels import integrate as kin
+from ..kernels.params import P_PHASE0
+from ..scene import Scene
+from ..simulate import Simulation, _raise_on_failure, simulate
+from .system import System
+
+__all__ = ["Section", "impact_section", "stroboscopic_section"]
+
+STROBOSCOPIC = "stroboscopic"
+IMPACT = "impact"
+
+
+@dataclass(frozen=True)
+class Section:
+    """Points of a Poincare section.
+
+    Attributes
+    ----------
+    kind : {"stroboscopic", "impact"}
+        How the points were taken.
+    times : ndarray (n_points,)
+        Normalised times t = tau omega_Ax of the points.
+    states : ndarray (n_points, n)
+        States in the order of ``state_names`` (lengths in A_g, velocities in
+        A_g omega_Ax, rotations in rad).
+    state_names : tuple of str
+    phase : float or None
+        Section phase as a fraction of T (stroboscopic sections; None for
+        impact sections, whose phases are ``(times / period) % 1``).
+    labels : tuple of str or None
+        Corner label of each point (impact sections), None otherwise.
+    cycles : ndarray of int (n_points,)
+        Excitation cycle index k of each point.
+    period : float
+        Excitation (sampling) period T, normalised time.
+    model : str
+        Model that ran ("towers", "pair", ..., or a reference system's name).
+    """
+
+    kind: str
+    times: np.ndarray
+    states: np.ndarray
+    state_names: tuple[str, ...]
+    phase: float | None
+    labels: tuple[str, ...] | None
+    cycles: np.ndarray
+    period: float
+    model: str
+
+    def __len__(self) -> int:
+        return int(self.times.shape[0])
+
+    def component(self, name: str) -> np.ndarray:
+        """The column of one state component, by name (e.g. ``"dX_A"``)."""
+        if name not in self.state_names:
+            raise ValueError(f"state {name!r} not in this section ({', '.join(self.state_names)})")
+        return self.states[:, self.state_names.index(name)]
+
+    def to_json_dict(self) -> dict:
+        """JSON-ready form."""
+        return {
+            "kind": self.kind,
+            "model": self.model,
+            "period": self.period,
+            "phase": self.phase,
+            "state_names": list(self.state_names),
+            "times": self.times.tolist(),
+            "cycles": self.cycles.tolist(),
+            "states": self.states.tolist(),
+            "labels": None if self.labels is None else list(self.labels),
+        }
+
+
+def stroboscopic_section(
+    scene_or_system: Scene | System,
+    *,
+    phase: float = 0.0,
+    transient: int | None = None,
+    cycles: int = 200,
+) -> Section:
+    """States at t = (phase + k) T, k = transient .. transient + cycles.
+
+    Parameters
+    ----------
+    scene_or_system : Scene or System
+        A Scene runs its smallest exact model through
+        :func:`chaospound.simulate.simulate` (its ``run.phase`` replaced by
+        ``phase``); a System (e.g. a reference oscillator or a system with
+        other solver settings) runs the same integrator from its initial
+        state at t = 0.
+    phase : float
+        Section phase as a fraction of the period, in [0, 1).
+    transient : int, optional
+        Cycles discarded first (default: the scene's ``run.transient`` or the
+        system's ``transient``).
+    cycles : int
+        Cycles recorded, >= 1; the section has cycles + 1 points.
+
+    Returns
+    -------
+    Section
+    """
+    phase = float(phase)
+    if not 0.0 <= phase < 1.0:
+        raise ValueError(f"phase = {phase!r}: must be in [0, 1) (a fraction of the period)")
+    cycles = int(cycles)
+    if cycles < 1:
+        raise ValueError(f"cycles = {cycles}: must be >= 1")
+    if transient is not None and int(transient) < 0:
+        raise ValueError(f"transient = {transient}: must be >= 0")
+    if isinstance(scene_or_system, Scene):
+        return _scene_section(scene_or_system, phase, transient, cycles)
+    if isinstance(scene_or_system, System):
+        return _system_section(scene_or_system, phase, transient, cycles)
+    raise TypeError(f"expected a Scene or a System, got {type(scene_or_system).__name__}")
+
+
+def impact_section(simulation: Simulation) -> Section:
+    """The state at the onset of every impact of a run, with its corner label.
+
+    Parameters
+    ----------
+    simulation : Simulation
+        A run of :func:`chaospound.simulate.simulate`.
+
+    Returns
+    -------
+    Section
+        ``kind = "impact"``; at every point d_max = max(d_lo, d_hi) = 0.
+    """
+    imp = simulation.impacts
+    return Section(
+        kind=IMPACT,
+        times=imp.time.copy(),
+        states=imp.state.copy(),
+        state_names=tuple(simulation.state_names),
+        phase=None,
+        labels=tuple(imp.labels),
+        cycles=imp.cycle.copy(),
+        period=simulation.period,
+        model=simulation.model,
+    )
+
+
+# ---------------------------------------------------------------- helpers
+def _scene_section(scene: Scene, phase: float, transient: int | None, cycles: int) -> Section:
+    if scene.run.phase != phase:
+        scene = scene.with_params(phase=phase)
+    sim = simulate(scene, transient=transient, record=cycles)
+    return Section(
+        kind=STROBOSCOPIC,
+        times=sim.strobe.time.copy(),
+        states=sim.strobe.state.copy(),
+        state_names=tuple(sim.state_names),
+        phase=phase,
+        labels=None,
+        cycles=sim.strobe.cycle.copy(),
+        period=sim.period,
+        model=sim.model,
+    )
+
+
+def _system_section(system: System, phase: float, transient: int | None, cycles: int) -> Section:
+    """One run of the cycle integrator from t = 0, recording every section."""
+    transient = system.transient if transient is None else int(transient)
+    period = system.period
+    params = system.params.copy()
+    params[P_PHASE0] = phase * period
+    system = replace(system, params=params)
+    n = system.dim
+    y = np.array(system.initial_state, dtype=np.float64, copy=True)
+    clock = np.array([0.0, -params[P_PHASE0], 0.0])
+    strobe = np.full((cycles + 1, n), np.nan)
+    stats = np.zeros(kin.N_STATS, dtype=np.int64)
+    kin.run_cycles(
+        system.model_id, system.method_id, params, y, clock, transient, transient + cycles,
+        system.rtol, system.atol, period / system.steps_per_cycle, system.max_steps,
+        system.restart_at_kinks, 0, strobe, np.zeros((1, n + 1)),
+        np.zeros((0, kin.N_IMP_FIELDS)), np.zeros((0, n)), stats, np.zeros((0, 0)),
+    )  # fmt: skip
+    _raise_on_failure(int(stats[kin.ST_STATUS]), stats, clock, period, system.max_steps, y)
+    k = np.arange(transient, transient + cycles + 1)
+    return Section(
+        kind=STROBOSCOPIC,
+        times=params[P_PHASE0] + k * period,
+        states=strobe,
+        state_names=tuple(system.state_names),
+        phase=phase,
+        labels=None,
+        cycles=k,
+        period=period,
+        model=system.model_name,
+    )

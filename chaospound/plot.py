@@ -1,0 +1,605 @@
+"""Figures built from results objects: phase diagrams, sections, impact maps,
+Lyapunov convergence and bifurcation diagrams.
+
+Every function takes results (a :class:`~chaospound.simulate.Simulation`, a
+:class:`~chaospound.dynamics.poincare.Section`, an
+:class:`~chaospound.dynamics.impact_map.ImpactMap`, a
+:class:`~chaospound.dynamics.lyapunov.Spectrum`, plain arrays of a sweep) and
+optionally the Figure or Axes to draw into, and returns the Figure. Nothing
+is shown or written except by :func:`save`. Figures are made with
+:class:`matplotlib.figure.Figure` directly, never through pyplot, so no
+backend or global state is touched (safe under Agg, in workers, in tests).
+
+Axes carry physical labels in the normalised units of MODEL.md section 1:
+lengths over A_g, time times omega_Ax, velocities over A_g omega_Ax,
+rotations in radians.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import tempfile
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
+
+if TYPE_CHECKING:
+    from .dynamics.impact_map import ImpactMap
+    from .dynamics.lyapunov import LargestExponent, Spectrum
+    from .dynamics.poincare import Section
+    from .simulate import Simulation
+
+__all__ = [
+    "CORNER_COLORS",
+    "REGIME_COLORS",
+    "axis_label",
+    "phase_panels",
+    "plot_bifurcation",
+    "plot_impact_map",
+    "plot_lyapunov_convergence",
+    "plot_phase_diagrams",
+    "plot_strobe",
+    "save",
+]
+
+#: colour of each corner label (impact sections, impact maps)
+CORNER_COLORS = {"A+": "C0", "A-": "C1", "B+": "C2", "B-": "C3", "face": "C7"}
+#: colour of each regime category (first word of a regime label)
+REGIME_COLORS = {
+    "none": "0.6",
+    "periodic": "C0",
+    "group-periodic": "C2",
+    "quasi-periodic": "C1",
+    "chaotic": "C3",
+}
+VELOCITY_LABEL = r"$V/(A_g\,\omega_{Ax})$"
+PHASE_LABEL = r"phase $(t\ \mathrm{mod}\ T)/T$"
+EXPONENT_LABEL = r"$\lambda/\omega_{Ax}$ (per unit $t = \tau\omega_{Ax}$)"
+PERIOD_RATIO_LABEL = r"$T/T_{Ax}$"
+_TOWER_PANELS = (
+    ("Tower A, translation", "X_A", "dX_A"),
+    ("Tower A, rotation", "th_A", "dth_A"),
+    ("Tower B, translation", "X_B", "dX_B"),
+    ("Tower B, rotation", "th_B", "dth_B"),
+)
+_STATE_NAME = re.compile(r"(d?)(X|Y|th)_([AB])")
+_ANNOTATION_OFFSET = 20.0  #: points between an impact marker and its number
+
+
+# ============================================================ phase diagrams
+def plot_phase_diagrams(simulation: Simulation, *, fig: Figure | None = None) -> Figure:
+    """Phase diagrams of the record window, impacts of the last cycle numbered.
+
+    One panel per degree of freedom that moves: for the towers model 2 x 2
+    (tower A: X vs X', theta vs theta'; tower B: the same), for the reduced
+    models fewer (pair: X_A, X_B; tower-wall: X_A, theta_A; wall: X_A). The
+    trajectory of the whole record window is drawn thin, its last cycle
+    bold; the impacts whose onset lies in the last cycle are marked at their
+    onset state and numbered 1, 2, 3, ... in time order, as in the paper's
+    Fig. 3, and listed with their corner labels under the panels.
+
+    Parameters
+    ----------
+    simulation : Simulation
+        A run with a dense trajectory (``simulate(..., samples_per_cycle=N)``,
+        a few hundred samples per cycle).
+    fig : Figure, optional
+        An empty figure to draw into.
+
+    Returns
+    -------
+    Figure
+    """
+    traj = simulation.trajectory
+    if traj is None:
+        raise ValueError(
+            "the simulation has no trajectory: run simulate(scene, samples_per_cycle=N) "
+            "with N > 0 (a few hundred) for phase diagrams"
+        )
+    panels = phase_panels(simulation.state_names)
+    fig, axes = _panel_figure(fig, len(panels))
+    period = simulation.period
+    last_cycle = simulation.transient + simulation.record - 1
+    in_last = traj.time >= simulation.strobe.time[-2] - 1e-9 * period
+    imp = simulation.impacts
+    numbered = np.nonzero(imp.cycle == last_cycle)[0]
+    labels = imp.labels
+    names = simulation.state_names
+    for ax, (title, position, rate) in zip(axes, panels, strict=True):
+        i, j = names.index(position), names.index(rate)
+        ax.plot(
+            traj.state[:, i],
+            traj.state[:, j],
+            color="0.7",
+            lw=0.6,
+            label=f"cycles {simulation.transient}-{last_cycle}",
+        )
+        ax.plot(
+            traj.state[in_last, i],
+            traj.state[in_last, j],
+            color="C0",
+            lw=1.2,
+            label=f"cycle {last_cycle}",
+        )
+        _number_impacts(ax, imp.state[numbered, i], imp.state[numbered, j], traj.state[:, [i, j]])
+        ax.margins(0.12)  # room for the numbers, which point away from the orbit
+        _style_panel(ax, title, position, rate)
+    axes[0].legend(loc="upper left", fontsize="small", frameon=False)
+    scene = simulation.scene
+    fig.suptitle(
+        f"{scene.name}: $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
+        f"{simulation.model} model, cycles {simulation.transient}-{last_cycle}"
+    )
+    if numbered.size:
+        key = "; ".join(
+            f"({n + 1}) {labels[k]} at phase {imp.phase[k]:.3f}, V = {imp.velocity[k]:.3g}"
+            for n, k in enumerate(numbered)
+        )
+        caption = f"impacts in cycle {last_cycle}: {key}"
+    else:
+        caption = f"no impact in cycle {last_cycle}"
+    fig.supxlabel(caption, fontsize="small")  # constrained layout keeps room for it
+    return fig
+
+
+def _number_impacts(ax: Axes, xs: np.ndarray, vs: np.ndarray, cloud: np.ndarray) -> None:
+    """Mark impact onsets and number them 1, 2, ..., pointing away from the orbit's centre."""
+    if xs.size == 0:
+        return
+    ax.plot(xs, vs, "o", mfc="none", mec="C3", ms=7, mew=1.2)
+    centre = 0.5 * (cloud.max(axis=0) + cloud.min(axis=0))
+    scale = np.maximum(cloud.max(axis=0) - cloud.min(axis=0), 1e-300)
+    for n, (x, v) in enumerate(zip(xs, vs, strict=True)):
+        direction = (np.array([x, v]) - centre) / scale
+        norm = float(np.hypot(*direction))
+        direction = direction / norm if norm > 1e-6 else np.array([0.0, 1.0])
+        ax.annotate(
+            str(n + 1),
+            xy=(x, v),
+            xytext=tuple(_ANNOTATION_OFFSET * direction),
+            textcoords="offset points",
+            ha="center",
+            va="center",
+            color="C3",
+            fontsize="small",
+            fontweight="bold",
+            bbox={"boxstyle": "circle,pad=0.2", "fc": "white", "ec": "C3", "lw": 0.8},
+            arrowprops={"arrowstyle": "-", "color": "C3", "lw": 0.6},
+            gid=f"impact-{n + 1}",
+        )
+
+
+# ================================================================ sections
+def plot_strobe(section: Section, *, fig: Figure | None = None) -> Figure:
+    """Points of a Poincare section in the panels of :func:`plot_phase_diagrams`.
+
+    Stroboscopic sections are drawn in one colour; impact sections are
+    coloured by corner label.
+
+    Parameters
+    ----------
+    section : Section
+        From :func:`~chaospound.dynamics.poincare.stroboscopic_section` or
+        :func:`~chaospound.dynamics.poincare.impact_section`.
+    fig : Figure, optional
+        An empty figure to draw into.
+
+    Returns
+    -------
+    Figure
+    """
+    panels = phase_panels(section.state_names)
+    fig, axes = _panel_figure(fig, len(panels))
+    names = section.state_names
+    for ax, (title, position, rate) in zip(axes, panels, strict=True):
+        x = section.states[:, names.index(position)]
+        v = section.states[:, names.index(rate)]
+        if section.labels is None:
+            ax.scatter(x, v, s=10, color="C0", linewidths=0)
+        else:
+            _scatter_by_corner(ax, x, v, section.labels)
+        _style_panel(ax, title, position, rate)
+    if section.labels is not None and len(section):
+        axes[0].legend(title="corner", fontsize="small", frameon=False)
+    if section.kind == "stroboscopic":
+        what = f"stroboscopic section at phase {section.phase:g} (t = (phase + k) T)"
+    else:
+        what = "impact section (state at onset)"
+    span = f", cycles {int(section.cycles[0])}-{int(section.cycles[-1])}" if len(section) else ""
+    fig.suptitle(f"{what}: {len(section)} points{span}, {section.model} model")
+    return fig
+
+
+# ============================================================== impact map
+def plot_impact_map(impact_map: ImpactMap, *, fig: Figure | None = None) -> Figure:
+    """The impact sequence (phase_n, V_n) and the return map V_n -> V_{n+1}.
+
+    Left: every impact at its phase and velocity, coloured by corner. Right:
+    the pairs (V_n, V_{n+1}) coloured by the corner of impact n, with the
+    diagonal V_{n+1} = V_n (a period-1 impact sequence sits on it).
+
+    Parameters
+    ----------
+    impact_map : ImpactMap
+    fig : Figure, optional
+        An empty figure to draw into.
+
+    Returns
+    -------
+    Figure
+    """
+    fig, axes = _panel_figure(fig, 2)
+    sequence, ret = axes
+    labels = impact_map.labels
+    _scatter_by_corner(sequence, impact_map.phase, impact_map.velocity, labels)
+    sequence.set_xlim(0.0, 1.0)
+    sequence.set_xlabel(PHASE_LABEL)
+    sequence.set_ylabel(VELOCITY_LABEL)
+    sequence.set_title(f"impact sequence ({len(impact_map)} impacts)")
+    pairs = impact_map.velocity_pairs
+    _scatter_by_corner(ret, pairs[:, 0], pairs[:, 1], labels[: pairs.shape[0]])
+    if pairs.shape[0]:
+        low, high = float(pairs.min()), float(pairs.max())
+        pad = 0.05 * max(high - low, 1e-3 * max(abs(high), 1.0))
+        ret.plot(
+            [low - pad, high + pad],
+            [low - pad, high + pad],
+            ls="--",
+            color="0.5",
+            lw=0.8,
+            label="$V_{n+1} = V_n$",
+        )
+    ret.set_xlabel(r"$V_n/(A_g\,\omega_{Ax})$")
+    ret.set_ylabel(r"$V_{n+1}/(A_g\,\omega_{Ax})$")
+    ret.set_title(r"return map $V_n \to V_{n+1}$ (colour: corner $n$)")
+    for ax in axes:
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize="small", frameon=False)
+    if not len(impact_map):
+        for ax in axes:
+            ax.text(0.5, 0.5, "no impacts", transform=ax.transAxes, ha="center", va="center")
+    fig.suptitle(f"impact map, {impact_map.model} model")
+    return fig
+
+
+# ================================================================ lyapunov
+def plot_lyapunov_convergence(
+    spectrum: Spectrum,
+    two_trajectory: LargestExponent | None = None,
+    *,
+    ax: Axes | None = None,
+) -> Figure:
+    """Running Lyapunov estimates against the number of cycles averaged.
+
+    Each exponent's running estimate (``spectrum.history``) is drawn with its
+    final value (dotted) and a band of +- one standard error; the right axis
+    gives the same values per excitation cycle (times T). The two-trajectory
+    estimate of the largest exponent, if given, is drawn dashed in black.
+
+    Parameters
+    ----------
+    spectrum : Spectrum
+    two_trajectory : LargestExponent, optional
+    ax : Axes, optional
+
+    Returns
+    -------
+    Figure
+    """
+    fig, ax = _single_axes(ax)
+    period = spectrum.period
+    cycles = np.arange(1, spectrum.history.shape[0] + 1)
+    for i, (value, error) in enumerate(zip(spectrum.exponents, spectrum.errors, strict=True)):
+        color = f"C{i % 10}"
+        ax.plot(
+            cycles,
+            spectrum.history[:, i],
+            color=color,
+            lw=1.0,
+            label=rf"$\lambda_{{{i + 1}}}$ = {value:.4g} $\pm$ {error:.2g}",
+        )
+        ax.axhline(value, color=color, ls=":", lw=0.8)
+        ax.axhspan(value - error, value + error, color=color, alpha=0.15, lw=0)
+    if two_trajectory is not None:
+        steps = np.arange(1, two_trajectory.history.shape[0] + 1)
+        ax.plot(
+            steps,
+            two_trajectory.history,
+            color="k",
+            ls="--",
+            lw=1.0,
+            label=f"two trajectories: {two_trajectory.exponent:.4g} "
+            rf"$\pm$ {two_trajectory.error:.2g}",
+        )
+        ax.axhspan(
+            two_trajectory.exponent - two_trajectory.error,
+            two_trajectory.exponent + two_trajectory.error,
+            color="k",
+            alpha=0.1,
+            lw=0,
+        )
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax.set_xlim(1, max(int(cycles[-1]) if cycles.size else 1, 2))
+    ax.set_xlabel(
+        f"excitation cycles averaged (after {spectrum.transient} + "
+        f"{spectrum.tangent_transient} transient)"
+    )
+    ax.set_ylabel(EXPONENT_LABEL)
+    right = ax.secondary_yaxis(
+        "right", functions=(lambda lam: lam * period, lambda lam: lam / period)
+    )
+    right.set_ylabel(r"$\lambda T$ (per excitation cycle)")
+    ax.set_ylim(*_converged_range(spectrum, two_trajectory))
+    ax.legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.16, 1.0), frameon=False)
+    total = float(spectrum.exponents.sum())
+    ax.set_title(
+        f"Lyapunov exponents (band: $\\pm$1 s.e.), sum {total:.4g}, trace {spectrum.trace:.4g}",
+        fontsize="medium",
+    )
+    return fig
+
+
+def _converged_range(spectrum: Spectrum, two: LargestExponent | None) -> tuple[float, float]:
+    """y-range showing the last 80 % of the running estimates, the bands and zero."""
+    skip = spectrum.history.shape[0] // 5
+    values = [
+        spectrum.history[skip:].ravel(),
+        spectrum.exponents - spectrum.errors,
+        spectrum.exponents + spectrum.errors,
+        np.zeros(1),
+    ]
+    if two is not None:
+        values += [
+            two.history[two.history.shape[0] // 5 :],
+            np.array([two.exponent - two.error, two.exponent + two.error]),
+        ]
+    finite = np.concatenate(values)
+    finite = finite[np.isfinite(finite)]
+    low, high = float(finite.min()), float(finite.max())
+    pad = 0.08 * max(high - low, 1e-12)
+    return low - pad, high + pad
+
+
+# ============================================================ bifurcation
+def plot_bifurcation(
+    parameter_values: Sequence[float] | np.ndarray,
+    impact_velocities_per_point: Sequence[Sequence[float] | np.ndarray],
+    regimes: Sequence[str] | None = None,
+    exponents: Sequence[float] | np.ndarray | None = None,
+    ax: Axes | Sequence[Axes] | None = None,
+    *,
+    parameter_label: str = PERIOD_RATIO_LABEL,
+) -> Figure:
+    """Impact velocity against a swept parameter (the paper's Figs. 4 and 5).
+
+    Parameters
+    ----------
+    parameter_values : sequence of float (m,)
+        The swept parameter at each point (e.g. T/T_Ax).
+    impact_velocities_per_point : sequence of m sequences
+        The impact velocities of each point's record window (any length,
+        empty for no impact).
+    regimes : sequence of m str, optional
+        Regime label of each point ("periodic 1-1", "chaotic", ...); points
+        are coloured by the label's first word (:data:`REGIME_COLORS`).
+    exponents : sequence of m float, optional
+        Largest Lyapunov exponent of each point (per unit normalised time;
+        NaN: unknown): drawn in a second panel below.
+    ax : Axes, or a pair of Axes with ``exponents``, optional
+    parameter_label : str
+        Label of the swept parameter's axis.
+
+    Returns
+    -------
+    Figure
+    """
+    values = np.asarray(parameter_values, dtype=float).reshape(-1)
+    m = values.size
+    if len(impact_velocities_per_point) != m:
+        raise ValueError(
+            f"impact_velocities_per_point has {len(impact_velocities_per_point)} "
+            f"entries for {m} parameter values"
+        )
+    if regimes is not None and len(regimes) != m:
+        raise ValueError(f"regimes has {len(regimes)} entries for {m} parameter values")
+    lam = None
+    if exponents is not None:
+        lam = np.asarray(exponents, dtype=float).reshape(-1)
+        if lam.size != m:
+            raise ValueError(f"exponents has {lam.size} entries for {m} parameter values")
+    fig, axes = _bifurcation_axes(ax, lam is not None)
+    top = axes[0]
+    categories = (
+        ["all"] * m
+        if regimes is None
+        else [str(r).split()[0] if str(r).split() else "unknown" for r in regimes]
+    )
+    colors = _category_colors(categories)
+    for category in dict.fromkeys(categories):
+        xs, vs = [], []
+        for value, velocities, cat in zip(
+            values, impact_velocities_per_point, categories, strict=True
+        ):
+            if cat == category:
+                v = np.asarray(velocities, dtype=float).reshape(-1)
+                xs.append(np.full(v.size, value))
+                vs.append(v)
+        x, v = np.concatenate(xs), np.concatenate(vs)
+        top.scatter(
+            x,
+            v,
+            s=9,
+            marker=".",
+            linewidths=0,
+            color=colors[category],
+            label=None if regimes is None else category,
+        )
+    top.set_ylabel(VELOCITY_LABEL)
+    top.set_xlabel(parameter_label)
+    if regimes is not None:
+        top.legend(fontsize="small", markerscale=3, frameon=False)
+    if lam is not None:
+        bottom = axes[1]
+        point_colors = [colors[c] for c in categories]
+        finite = np.isfinite(lam)
+        bottom.plot(values[finite], lam[finite], color="0.6", lw=0.6)
+        bottom.scatter(
+            values[finite],
+            lam[finite],
+            s=10,
+            linewidths=0,
+            c=[point_colors[i] for i in np.nonzero(finite)[0]],
+        )
+        bottom.axhline(0.0, color="k", lw=0.5)
+        bottom.set_ylabel(r"$\lambda_1/\omega_{Ax}$")
+        bottom.set_xlabel(parameter_label)
+        top.set_xlabel("")
+    return fig
+
+
+# ==================================================================== save
+def save(fig: Figure, path: str | os.PathLike[str], *, dpi: int = 150) -> None:
+    """Write a figure atomically: a temporary file in the same folder, then a rename.
+
+    The format follows the extension (``.png``, ``.pdf``, ``.svg``, ...).
+    Nothing is left behind when writing fails.
+
+    Raises
+    ------
+    FileNotFoundError
+        The target's folder does not exist.
+    ValueError
+        An unknown format (from matplotlib).
+    """
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise FileNotFoundError(f"cannot save figure to {path!r}: folder {folder!r} does not exist")
+    if os.path.isdir(path):
+        raise IsADirectoryError(f"cannot save figure to {path!r}: it is a directory")
+    extension = os.path.splitext(path)[1].lstrip(".").lower() or "png"
+    handle, temporary = tempfile.mkstemp(dir=folder, prefix=".chaospound-", suffix=".tmp")
+    try:
+        os.chmod(temporary, _new_file_mode())
+        with os.fdopen(handle, "wb") as stream:
+            fig.savefig(stream, format=extension, dpi=dpi)
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(temporary)
+        raise
+
+
+# ================================================================= helpers
+def _new_file_mode() -> int:
+    """Permissions of a newly created file (0o666 less the umask), not mkstemp's 0o600."""
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def phase_panels(state_names: Sequence[str]) -> list[tuple[str, str, str]]:
+    """(title, position, velocity) of each phase-diagram panel of a model.
+
+    The towers model gives four panels (X and theta of each tower), the
+    reduced models the ones they have; other systems pair consecutive states.
+    """
+    names = tuple(state_names)
+    panels = [p for p in _TOWER_PANELS if p[1] in names and p[2] in names]
+    if panels:
+        return panels
+    if len(names) < 2:
+        raise ValueError(f"need at least two states for a phase diagram, got {names}")
+    starts = list(range(0, len(names) - 1, 2))
+    if len(names) % 2:
+        starts[-1] = len(names) - 2
+    return [(f"{names[s]} vs {names[s + 1]}", names[s], names[s + 1]) for s in starts]
+
+
+def axis_label(name: str) -> str:
+    """Axis label with units for a state name ("X_A" -> "$X_A/A_g$", ...)."""
+    match = _STATE_NAME.fullmatch(name)
+    if match is None:
+        return name
+    rate, kind, tower = match.groups()
+    if kind == "th":
+        if rate:
+            return rf"$\dot\theta_{tower}/\omega_{{Ax}}$ (rad)"
+        return rf"$\theta_{tower}$ (rad)"
+    if rate:
+        return rf"$\dot {kind}_{tower}/(A_g\,\omega_{{Ax}})$"
+    return rf"${kind}_{tower}/A_g$"
+
+
+def _style_panel(ax: Axes, title: str, position: str, rate: str) -> None:
+    ax.set_title(title)
+    ax.set_xlabel(axis_label(position))
+    ax.set_ylabel(axis_label(rate))
+    ax.xaxis.set_major_locator(MaxNLocator(nbins=6))
+
+
+def _panel_figure(fig: Figure | None, n_panels: int) -> tuple[Figure, list[Axes]]:
+    """A figure with n panels (2 x 2 for four, else one row), below a title and above a caption."""
+    rows, cols = (2, 2) if n_panels == 4 else (1, n_panels)
+    if fig is None:
+        fig = Figure(figsize=(5.0 * cols, 4.3 * rows + 0.6), layout="constrained")
+    elif fig.axes:
+        raise ValueError("the figure already has axes: pass an empty Figure")
+    grid = fig.subplots(rows, cols, squeeze=False)
+    return fig, list(grid.ravel())
+
+
+def _single_axes(ax: Axes | None) -> tuple[Figure, Axes]:
+    if ax is None:
+        fig = Figure(figsize=(10.0, 5.0), layout="constrained")
+        return fig, fig.add_subplot()
+    return ax.figure, ax
+
+
+def _bifurcation_axes(ax, with_exponents: bool) -> tuple[Figure, list[Axes]]:
+    if ax is None:
+        if with_exponents:
+            fig = Figure(figsize=(9.0, 7.0), layout="constrained")
+            axes = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1))
+            return fig, list(axes)
+        fig = Figure(figsize=(9.0, 5.0), layout="constrained")
+        return fig, [fig.add_subplot()]
+    if isinstance(ax, Axes):
+        if with_exponents:
+            raise ValueError("exponents need a second panel: pass ax=(top, bottom) or no ax")
+        return ax.figure, [ax]
+    axes = list(ax)
+    if len(axes) != (2 if with_exponents else 1):
+        raise ValueError(f"ax: got {len(axes)} axes, need {2 if with_exponents else 1}")
+    return axes[0].figure, axes
+
+
+def _scatter_by_corner(ax: Axes, x: np.ndarray, v: np.ndarray, labels: Sequence[str]) -> None:
+    labels = np.asarray(labels, dtype=object)
+    for label, color in CORNER_COLORS.items():
+        mask = labels == label
+        if np.any(mask):
+            ax.scatter(
+                np.asarray(x)[mask],
+                np.asarray(v)[mask],
+                s=14,
+                color=color,
+                linewidths=0,
+                label=label,
+            )
+
+
+def _category_colors(categories: Sequence[str]) -> dict[str, str]:
+    colors: dict[str, str] = {}
+    spare = iter(f"C{i}" for i in (4, 5, 6, 8, 9, 7) * 10)
+    for category in dict.fromkeys(categories):
+        colors[category] = REGIME_COLORS.get(category) or (
+            "k" if category == "all" else next(spare)
+        )
+    return colors

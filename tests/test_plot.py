@@ -1,0 +1,337 @@
+"""Figures (chaospound.plot) and the ``chaospound lyapunov`` command.
+
+The figures are checked for content: which panels, which labels, that the
+drawn points are the results' numbers, that the numbered impacts are the
+last cycle's impacts in order; save() for atomic writes. The command is
+checked against the Lyapunov engine's invariants (the trace identity).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from chaospound import plot  # noqa: E402
+from chaospound.cli import main  # noqa: E402
+from chaospound.dynamics.impact_map import impact_map  # noqa: E402
+from chaospound.dynamics.lyapunov import (  # noqa: E402
+    largest_exponent_two_trajectory,
+    lyapunov_spectrum,
+)
+from chaospound.dynamics.poincare import impact_section, stroboscopic_section  # noqa: E402
+from chaospound.scene import load_preset  # noqa: E402
+from chaospound.simulate import simulate  # noqa: E402
+
+FIG3A = load_preset("fig3a")
+
+
+@functools.cache
+def fig3a_run():
+    return simulate(FIG3A, transient=60, record=3, samples_per_cycle=120)
+
+
+@functools.cache
+def fig3a_spectrum():
+    return lyapunov_spectrum(FIG3A, k=3, tangent_transient=5, cycles=30)
+
+
+def numbered(ax) -> list:
+    """The impact-number annotations of a panel, in drawing order."""
+    return [t for t in ax.texts if (t.get_gid() or "").startswith("impact-")]
+
+
+# ------------------------------------------------------------ phase diagrams
+def test_phase_diagrams_of_towers_model():
+    sim = fig3a_run()
+    fig = plot.plot_phase_diagrams(sim)
+    assert isinstance(fig, Figure) and len(fig.axes) == 4
+    expected = [("X_A", "dX_A"), ("th_A", "dth_A"), ("X_B", "dX_B"), ("th_B", "dth_B")]
+    last = np.nonzero(sim.impacts.cycle == sim.transient + sim.record - 1)[0]
+    assert len(last) == 3  # fig3a: three impacts per cycle
+    for ax, (position, rate) in zip(fig.axes, expected, strict=True):
+        assert ax.get_xlabel() == plot.axis_label(position)
+        assert ax.get_ylabel() == plot.axis_label(rate)
+        assert ax.get_title()
+        # the record-window trajectory is drawn, as is
+        i, j = sim.state_names.index(position), sim.state_names.index(rate)
+        xs, ys = ax.lines[0].get_data()
+        np.testing.assert_array_equal(xs, sim.trajectory.state[:, i])
+        np.testing.assert_array_equal(ys, sim.trajectory.state[:, j])
+        # impacts of the last cycle numbered 1, 2, 3 at their onset states, in time order
+        notes = numbered(ax)
+        assert [t.get_text() for t in notes] == [str(n + 1) for n in range(len(last))]
+        for note, k in zip(notes, last, strict=True):
+            assert note.xy == pytest.approx((sim.impacts.state[k, i], sim.impacts.state[k, j]))
+    units = [fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel(), fig.axes[1].get_xlabel()]
+    assert "A_g" in units[0] and r"\omega_{Ax}" in units[1] and "rad" in units[2]
+    caption = fig._supxlabel.get_text()
+    labels = [sim.impacts.labels[k] for k in last]
+    assert labels == ["A+", "B-", "A+"]
+    positions = [caption.index(f"({n + 1}) {label}") for n, label in enumerate(labels)]
+    assert positions == sorted(positions)
+
+
+@pytest.mark.parametrize(
+    ("preset", "panels"),
+    [
+        ("fig4-translational", [("X_A", "dX_A"), ("X_B", "dX_B")]),
+        ("tower-wall", [("X_A", "dX_A"), ("th_A", "dth_A")]),
+        ("wall", [("X_A", "dX_A")]),
+    ],
+)
+def test_phase_diagrams_of_reduced_models(preset, panels):
+    sim = simulate(load_preset(preset), transient=20, record=2, samples_per_cycle=60)
+    fig = plot.plot_phase_diagrams(sim)
+    assert len(fig.axes) == len(panels)
+    for ax, (position, rate) in zip(fig.axes, panels, strict=True):
+        assert (ax.get_xlabel(), ax.get_ylabel()) == (
+            plot.axis_label(position),
+            plot.axis_label(rate),
+        )
+        n_last = int(np.sum(sim.impacts.cycle == sim.transient + sim.record - 1))
+        assert len(numbered(ax)) == n_last
+
+
+def test_phase_diagrams_need_a_trajectory():
+    with pytest.raises(ValueError, match="samples_per_cycle"):
+        plot.plot_phase_diagrams(simulate(FIG3A, transient=1, record=1))
+
+
+def test_axis_labels_carry_units():
+    assert plot.axis_label("X_B") == "$X_B/A_g$"
+    assert plot.axis_label("dY_A") == r"$\dot Y_A/(A_g\,\omega_{Ax})$"
+    assert plot.axis_label("th_A") == r"$\theta_A$ (rad)"
+    assert "rad" in plot.axis_label("dth_B")
+    assert plot.axis_label("x") == "x"
+
+
+# ---------------------------------------------------------------- sections
+def test_strobe_plot_draws_the_section_points():
+    section = stroboscopic_section(FIG3A, phase=0.25, transient=10, cycles=6)
+    fig = plot.plot_strobe(section)
+    assert len(fig.axes) == 4
+    names = section.state_names
+    for ax, (_, position, rate) in zip(fig.axes, plot.phase_panels(names), strict=True):
+        points = ax.collections[0].get_offsets()
+        np.testing.assert_array_equal(points[:, 0], section.component(position))
+        np.testing.assert_array_equal(points[:, 1], section.component(rate))
+        assert ax.get_xlabel() and ax.get_ylabel()
+    assert "phase 0.25" in fig.get_suptitle() and "7 points" in fig.get_suptitle()
+
+
+def test_impact_section_plot_is_coloured_by_corner():
+    section = impact_section(fig3a_run())
+    fig = plot.plot_strobe(section)
+    legend = fig.axes[0].get_legend()
+    assert sorted(t.get_text() for t in legend.get_texts()) == ["A+", "B-"]
+    drawn = sum(len(c.get_offsets()) for c in fig.axes[0].collections)
+    assert drawn == len(section) == 9
+
+
+# -------------------------------------------------------------- impact map
+def test_impact_map_plot():
+    imap = impact_map(fig3a_run())
+    fig = plot.plot_impact_map(imap)
+    assert len(fig.axes) == 2
+    sequence, ret = fig.axes
+    assert "phase" in sequence.get_xlabel() and "A_g" in sequence.get_ylabel()
+    assert "V_n" in ret.get_xlabel() and "V_{n+1}" in ret.get_ylabel()
+    # every impact drawn once in the sequence, every pair once in the return map
+    assert sum(len(c.get_offsets()) for c in sequence.collections) == len(imap)
+    pairs = np.concatenate([c.get_offsets() for c in ret.collections])
+    assert pairs.shape == imap.velocity_pairs.shape
+    np.testing.assert_allclose(np.sort(pairs[:, 0]), np.sort(imap.velocity_pairs[:, 0]))
+    labels = {t.get_text() for t in sequence.get_legend().get_texts()}
+    assert labels == {"A+", "B-"}
+
+
+# ---------------------------------------------------------------- lyapunov
+def test_lyapunov_convergence_plot():
+    spectrum = fig3a_spectrum()
+    two = largest_exponent_two_trajectory(FIG3A.with_params(rtol=1e-10, atol=1e-12), cycles=20)
+    fig = plot.plot_lyapunov_convergence(spectrum, two)
+    ax = fig.axes[0]
+    assert len(fig.axes) == 1
+    histories = [line for line in ax.lines if len(line.get_xdata()) == spectrum.cycles]
+    for i in range(3):
+        np.testing.assert_array_equal(histories[i].get_ydata(), spectrum.history[:, i])
+    dashed = [line for line in ax.lines if line.get_linestyle() == "--"]
+    np.testing.assert_array_equal(dashed[0].get_ydata(), two.history)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert len(texts) == 4 and f"{spectrum.exponents[0]:.4g}" in texts[0]
+    assert "omega_{Ax}" in ax.get_ylabel() and "cycles" in ax.get_xlabel()
+    lo, hi = ax.get_ylim()
+    assert lo < spectrum.exponents.min() and hi >= 0.0  # final values and zero visible
+
+
+def test_plots_draw_into_given_axes():
+    fig = Figure()
+    ax = fig.add_subplot()
+    assert plot.plot_lyapunov_convergence(fig3a_spectrum(), ax=ax) is fig
+    empty = Figure()
+    assert plot.plot_impact_map(impact_map(fig3a_run()), fig=empty) is empty
+    with pytest.raises(ValueError, match="already has axes"):
+        plot.plot_impact_map(impact_map(fig3a_run()), fig=fig)
+
+
+# ------------------------------------------------------------- bifurcation
+@functools.cache
+def small_sweep():
+    """Translational pair model at three period ratios (the paper's Fig. 4 dots)."""
+    ratios = [0.6, 0.8, 1.2]
+    runs = [
+        simulate(
+            load_preset("fig4-translational").with_params(period_ratio=r), transient=30, record=4
+        )
+        for r in ratios
+    ]
+    return ratios, [run.impacts.velocity for run in runs]
+
+
+def test_bifurcation_diagram_points_and_regimes():
+    ratios, velocities = small_sweep()
+    regimes = ["periodic 1-1", "chaotic", "periodic 1-1"]
+    fig = plot.plot_bifurcation(ratios, velocities, regimes=regimes)
+    assert len(fig.axes) == 1
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == plot.PERIOD_RATIO_LABEL and "A_g" in ax.get_ylabel()
+    drawn = {c.get_label(): c.get_offsets() for c in ax.collections}
+    assert set(drawn) == {"periodic", "chaotic"}
+    assert len(drawn["periodic"]) == len(velocities[0]) + len(velocities[2])
+    np.testing.assert_array_equal(drawn["chaotic"][:, 0], ratios[1])
+    np.testing.assert_array_equal(drawn["chaotic"][:, 1], velocities[1])
+
+
+def test_bifurcation_with_exponent_panel():
+    ratios, velocities = small_sweep()
+    fig = plot.plot_bifurcation(ratios, velocities, exponents=[-0.1, np.nan, -0.05])
+    assert len(fig.axes) == 2
+    bottom = fig.axes[1]
+    assert "lambda" in bottom.get_ylabel() and bottom.get_xlabel() == plot.PERIOD_RATIO_LABEL
+    assert len(bottom.collections[0].get_offsets()) == 2  # the NaN point is left out
+    with pytest.raises(ValueError, match="exponents"):
+        plot.plot_bifurcation(ratios, velocities, exponents=[0.1])
+    with pytest.raises(ValueError, match="regimes"):
+        plot.plot_bifurcation(ratios, velocities, regimes=["chaotic"])
+
+
+# -------------------------------------------------------------------- save
+def test_save_writes_png_atomically(tmp_path):
+    fig = plot.plot_impact_map(impact_map(fig3a_run()))
+    target = tmp_path / "map.png"
+    plot.save(fig, target)
+    assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert os.listdir(tmp_path) == ["map.png"]  # no temporary left behind
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        plot.save(fig, tmp_path / "missing" / "map.png")
+    assert not (tmp_path / "missing").exists()
+    with pytest.raises(ValueError):
+        plot.save(fig, tmp_path / "map.unknown-format")
+    assert os.listdir(tmp_path) == ["map.png"]  # a failed write leaves nothing
+
+
+# ------------------------------------------------------ chaospound lyapunov
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_cli_lyapunov_json(capsys):
+    code, out, err = run_cli(
+        capsys, "lyapunov", "--preset", "fig3a", "--k", "2", "--cycles", "40", "--json"
+    )
+    assert code == 0 and err == ""
+    document = json.loads(out)
+    for key in (
+        "exponents",
+        "errors",
+        "max_exponent",
+        "per_cycle",
+        "errors_per_cycle",
+        "sum",
+        "trace",
+        "kaplan_yorke",
+        "model",
+        "scene",
+    ):
+        assert key in document
+    assert document["model"] == "towers" and len(document["exponents"]) == 2
+    assert document["sum"] == pytest.approx(sum(document["exponents"]), rel=1e-12)
+    period = document["period"]
+    assert document["per_cycle"] == pytest.approx([e * period for e in document["exponents"]])
+    assert document["max_exponent"] == max(document["exponents"])
+    assert document["max_exponent"] < 0  # fig3a is periodic
+    assert "two_trajectory" not in document
+
+
+def test_cli_lyapunov_full_spectrum_obeys_trace_identity(capsys, tmp_path):
+    figure = tmp_path / "lyap.png"
+    code, out, _ = run_cli(
+        capsys,
+        "lyapunov",
+        "--preset",
+        "fig3a",
+        "--cycles",
+        "40",
+        "--tangent-transient",
+        "5",
+        "--two-trajectory",
+        "--json",
+        "--plot",
+        str(figure),
+    )
+    assert code == 0
+    document = json.loads(out)
+    assert len(document["exponents"]) == 12 and document["full_spectrum"]
+    assert document["sum"] == pytest.approx(document["trace"], rel=1e-3)
+    two = document["two_trajectory"]
+    assert abs(two["exponent"] - document["max_exponent"]) < 3 * (two["error"] + 0.005)
+    assert figure.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_lyapunov_report(capsys):
+    code, out, _ = run_cli(capsys, "lyapunov", "--preset", "fig3a", "--k", "3", "--cycles", "20")
+    assert code == 0
+    assert "lambda (per unit t)" in out and "lambda T (per cycle)" in out
+    assert "Kaplan-Yorke dimension" in out and "sum" in out and "trace identity" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--k", "13"], "--k 13"),
+        (["--k", "0"], "--k 0"),
+        (["--k", "two"], "--k"),
+        (["--cycles", "5"], "--cycles 5"),
+    ],
+)
+def test_cli_lyapunov_bad_input_exits_2_with_one_line(capsys, tmp_path, argv, message):
+    target = tmp_path / "out.png"
+    code, out, err = run_cli(capsys, "lyapunov", "--preset", "fig3a", *argv, "--plot", str(target))
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and err.startswith("chaospound: error:") and message in err
+    assert not target.exists()
+
+
+def test_cli_lyapunov_plot_into_missing_folder(capsys, tmp_path):
+    code, out, err = run_cli(
+        capsys,
+        "lyapunov",
+        "--preset",
+        "fig3a",
+        "--cycles",
+        "10",
+        "--plot",
+        str(tmp_path / "no" / "lyap.png"),
+    )
+    assert code == 2 and out == "" and "does not exist" in err
