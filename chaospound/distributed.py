@@ -39,7 +39,8 @@ def connect(scheduler: str, workers: int = 2):
     try:
         from distributed import Client, LocalCluster
     except ImportError:  # pragma: no cover - the extra is not installed
-        raise ValueError("--scheduler needs dask.distributed: pip install 'chaospound[dask]'") from None
+        raise ValueError(
+            "--scheduler needs dask.distributed: pip install 'chaospound[dask]'") from None
     if scheduler == "local":
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=None)
