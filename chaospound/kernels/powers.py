@@ -43,3 +43,39 @@ def ground(t, p):
     r = p[P_PERIOD_RATIO]
     arg = t / r
     return math.sin(arg), math.cos(arg) / r
+
+
+SHIFT_MAX = 0.3  #: |x| up to which sin/cos(x) come from the Taylor series below
+
+
+@njit(cache=True)
+def ground_shifted(sin0, cos0, shift, p):
+    """Ground motion at ``t + shift`` from ``sin(t/r)`` and ``cos(t/r)``.
+
+    Angle addition with ``x = shift / r``; for ``|x| <= SHIFT_MAX`` sin x and cos x
+    are their Taylor series to x^13 and x^14 (truncation below 1e-19, so the
+    result equals the direct evaluation to rounding), else the library's.
+    """
+    if p[P_GROUND] == 0.0:
+        return 0.0, 0.0
+    r = p[P_PERIOD_RATIO]
+    x = shift / r
+    if abs(x) <= SHIFT_MAX:
+        x2 = x * x
+        sin_x = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (
+            1.0 - x2 / 72.0 * (1.0 - x2 / 110.0 * (1.0 - x2 / 156.0))))))
+        cos_x = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0 * (
+            1.0 - x2 / 90.0 * (1.0 - x2 / 132.0 * (1.0 - x2 / 182.0))))))
+    else:
+        sin_x = math.sin(x)
+        cos_x = math.cos(x)
+    return sin0 * cos_x + cos0 * sin_x, (cos0 * cos_x - sin0 * sin_x) / r
+
+
+@njit(cache=True)
+def ground_phase(t, p):
+    """``(sin(t/r), cos(t/r))``, the anchor of :func:`ground_shifted` (0, 1 without ground)."""
+    if p[P_GROUND] == 0.0:
+        return 0.0, 1.0
+    arg = t / p[P_PERIOD_RATIO]
+    return math.sin(arg), math.cos(arg)

@@ -47,7 +47,7 @@ import numpy as np
 from numba import njit
 
 from .models import rhs, rhs_grounded
-from .powers import ground
+from .powers import ground, ground_phase, ground_shifted
 
 # ------------------------------------------------------------------ methods
 DOPRI5 = 0
@@ -602,20 +602,26 @@ _E1, _E3, _E4, _E5, _E6, _E7 = (-71 / 57600, 71 / 16695, -71 / 1920, 17253 / 339
 def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
     """Unrolled Dormand-Prince 5(4) step; same results as the generic tableau loop."""
     n = y.shape[0]
+    # ground motion at the inner stages by angle addition from the step start
+    sin0, cos0 = ground_phase(t, p)
     for i in range(n):
         K[0, i] = f0[i]
         y_new[i] = y[i] + h * (_A21 * f0[i])
-    rhs(model, t + 0.2 * h, y_new, p, K[1])
+    ug, vg = ground_shifted(sin0, cos0, 0.2 * h, p)
+    rhs_grounded(model, t + 0.2 * h, y_new, p, ug, vg, K[1])
     for i in range(n):
         y_new[i] = y[i] + h * (_A31 * K[0, i] + _A32 * K[1, i])
-    rhs(model, t + 0.3 * h, y_new, p, K[2])
+    ug, vg = ground_shifted(sin0, cos0, 0.3 * h, p)
+    rhs_grounded(model, t + 0.3 * h, y_new, p, ug, vg, K[2])
     for i in range(n):
         y_new[i] = y[i] + h * (_A41 * K[0, i] + _A42 * K[1, i] + _A43 * K[2, i])
-    rhs(model, t + 0.8 * h, y_new, p, K[3])
+    ug, vg = ground_shifted(sin0, cos0, 0.8 * h, p)
+    rhs_grounded(model, t + 0.8 * h, y_new, p, ug, vg, K[3])
     for i in range(n):
         y_new[i] = y[i] + h * (_A51 * K[0, i] + _A52 * K[1, i] + _A53 * K[2, i]
                                + _A54 * K[3, i])
-    rhs(model, t + (8.0 / 9.0) * h, y_new, p, K[4])
+    ug, vg = ground_shifted(sin0, cos0, (8.0 / 9.0) * h, p)
+    rhs_grounded(model, t + (8.0 / 9.0) * h, y_new, p, ug, vg, K[4])
     for i in range(n):
         y_new[i] = y[i] + h * (_A61 * K[0, i] + _A62 * K[1, i] + _A63 * K[2, i]
                                + _A64 * K[3, i] + _A65 * K[4, i])
