@@ -1,0 +1,698 @@
+"""Regime classification of a steady pounding response (MODEL.md section 5).
+
+A response is one of
+
+* ``none``: no impact in the record window;
+* ``periodic n-P``: the stroboscopic section repeats every P excitation cycles
+  and so do the n impacts of one period, with n <= P (1-1, 1-2, 2-2, ...);
+* ``group-periodic n-P``: the same with n > P, a group of different impacts
+  repeating every P cycles (the paper's 3-1 at T/T_Ax = 0.70);
+* ``quasi-periodic``: no period up to ``max_period`` cycles, largest Lyapunov
+  exponent zero within three standard errors, 0-1 test K below 0.2;
+* ``chaotic``: no period, largest exponent above zero by more than three
+  standard errors, 0-1 test not against it (K >= 0.2);
+* ``unresolved``: anything else (the evidence says why).
+
+The rules, in the order :func:`classify` applies them (the same text is in
+``docs/classification.md``):
+
+1. Solver. The runs use ``rtol_used = min(rtol, 1e-8)`` and
+   ``atol_used = min(atol, 1e-2 rtol_used)``; the stroboscopic tolerance is
+   ``tol = 1e3 rtol_used`` (1e-5), relative to the state scale. Converged
+   impacting orbits repeat to 2e-8 .. 4e-7 at this setting, a margin of 25
+   or more below tol, while the 1 % residue of a 3 %-damped transient after
+   40 cycles (MODEL.md 5) is 1000 times above it. Fixed-step rk4 has no rtol:
+   tol = 1e-5 and its ``steps_per_cycle`` must be fine enough.
+2. State scale. Rotations and their rates are multiplied by the tower's
+   radius of gyration rho, so that every component is a length (A_g) or a
+   velocity (A_g omega_Ax). The mismatch of a period P over a stretch of
+   sections is ``max_k |x_{k+P} - x_k| / scale``, ``scale`` being the largest
+   Euclidean norm of the sections compared.
+3. Adaptive transient. From the scene's initial state, ``min_transient``
+   cycles, then ``chunk`` cycles at a time (each run continuing from the last
+   section, ``start_at_section=True``), until the last max(2P, 10)
+   section pairs P apart of some P <= max_period repeat within tol / 10, or
+   ``max_transient`` cycles have run.
+4. Record window of ``window`` cycles (default ``max(4 max_period, 32)``).
+   The period P is the smallest P <= max_period whose mismatch over the whole
+   window is below tol and whose impacts repeat: impact i + n comes P cycles
+   after impact i (within ``10 tol`` cycles), at the same corner, with the
+   same velocity (within ``10 tol`` times the largest |V|), n being the number
+   of impacts in one period. If the last sections of the window have
+   converged (rule 3's test at tol) to another period than the window as a
+   whole (a transient still decaying), the window counts as transient and a
+   new one is recorded, while the total stays within ``max_transient``.
+   ``transient_used`` is the number of cycles run before the final window.
+5. No impact in the window: ``none`` (its ``period_cycles`` is the period of
+   the motion if found). Period found: ``periodic`` when n <= P,
+   ``group-periodic`` when n > P.
+6. No period. The record is extended to 1000 sections for the 0-1 test
+   (observable: the scaled sections projected on their first principal
+   direction), then the largest exponent lambda +- sigma is computed
+   (:func:`~chaospound.dynamics.lyapunov.lyapunov_spectrum`, k = 1,
+   ``lyapunov_cycles`` cycles from the last section, 20 cycles of tangent
+   alignment, error of 10 block means). Chaotic when lambda > 3 sigma
+   (MODEL.md's default rule) and K >= 0.2 (K < 0.2 clearly contradicts);
+   quasi-periodic when |lambda| <= 3 sigma and K < 0.2 (an exponent that is
+   merely consistent with zero is not enough on its own); unresolved
+   otherwise, in particular lambda < -3 sigma without a period (a period
+   longer than max_period or a transient longer than max_transient). With
+   ``test01=False`` the exponent decides alone.
+7. Without an exponent (:func:`classify_sequence` on bare data) the 0-1 test
+   decides: chaotic when K > 0.8, quasi-periodic when K < 0.2, unresolved
+   between (and below 100 sections, where no K is computed).
+
+Confidence, in [0, 1]: periodic and group-periodic
+``log10(tol / mismatch) / 2`` (1 at a mismatch 100 times below tol, 0 at
+tol); ``none`` 1 (0.5 when the motion has no period); chaotic the smaller of
+``(lambda / sigma - 3) / 7`` and ``(K - 0.2) / 0.6``; quasi-periodic the
+smaller of ``1 - |lambda / sigma| / 3`` and ``(0.2 - K) / 0.2``; each clipped
+to [0, 1], a piece of evidence that was not computed left out; unresolved 0.
+
+Units: exponents per unit normalised time t = tau omega_Ax (times T: per
+excitation cycle); periods and transients in excitation cycles.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..kernels.integrate import CORNER_LABELS
+from ..scene import Scene
+from .system import System, as_system
+
+__all__ = [
+    "CLASSIFY_RTOL",
+    "DEFAULT_TOL",
+    "REGIMES",
+    "Regime",
+    "classify",
+    "classify_sequence",
+    "zero_one_test",
+]
+
+#: regime names, in the order of the rules
+REGIMES = ("none", "periodic", "group-periodic", "quasi-periodic", "chaotic", "unresolved")
+CLASSIFY_RTOL = 1e-8  #: the loosest rtol a classification runs with
+TOL_PER_RTOL = 1e3  #: tol = TOL_PER_RTOL * rtol (relative stroboscopic mismatch)
+DEFAULT_TOL = TOL_PER_RTOL * CLASSIFY_RTOL  #: 1e-5
+TRANSIENT_MARGIN = 0.1  #: the transient ends when the tail repeats within this * tol
+TAIL_MIN = 10  #: the convergence test compares at least this many section pairs
+ATOL_PER_RTOL = 1e-2  #: atol used <= ATOL_PER_RTOL * rtol used
+IMPACT_TOL_FACTOR = 10.0  #: impact times (cycles) and velocities (relative) repeat within this*tol
+SIGMAS = 3.0  #: the exponent's evidence rule: lambda beyond 3 standard errors
+ZERO_ONE_CHAOTIC = 0.8  #: K above: the 0-1 test alone calls the data chaotic
+ZERO_ONE_REGULAR = 0.2  #: K below: regular; vetoes chaos, and quasi-periodicity needs it
+ZERO_ONE_CYCLES = 1000  #: sections recorded for the 0-1 test when no period is found
+ZERO_ONE_MIN_POINTS = 100  #: fewer points: no 0-1 test (K = None)
+ZERO_ONE_C_RANGE = (math.pi / 5, 4 * math.pi / 5)  #: c avoids the resonances at 0 and pi
+MISMATCH_DECADES = 2.0  #: a mismatch this many decades below tol gives full confidence
+Z_FULL_CONFIDENCE = 10.0  #: lambda / sigma giving full confidence in chaos
+
+
+@dataclass(frozen=True)
+class Regime:
+    """The classified regime of a steady response.
+
+    Attributes
+    ----------
+    regime : str
+        One of :data:`REGIMES`.
+    impacts_per_period : int or None
+        n, impacts per period (0 for ``none``; None without a period).
+    period_cycles : int or None
+        P, the period in excitation cycles (None when no period was found).
+    corner_sequence : list of str
+        Corner labels of the n impacts of one period, in time order, starting
+        with the first impact after a section of the record window.
+    strobe_mismatch : float
+        Relative stroboscopic mismatch ``max_k |x_{k+P} - x_k| / scale`` at
+        the period found, or at the best candidate P <= max_period.
+    max_exponent, max_exponent_error : float or None
+        Largest Lyapunov exponent and its standard error (per unit normalised
+        time); computed only when no period is found.
+    zero_one : float or None
+        K of the 0-1 test (about 0 regular, about 1 chaotic); computed only
+        when no period is found.
+    confidence : float
+        In [0, 1], see the module docstring.
+    transient_used : int
+        Excitation cycles integrated before the record window.
+    evidence : dict
+        Further numbers: tol, scale, the mismatch of every candidate period,
+        the solver tolerances, window lengths, lambda / sigma, ...
+    """
+
+    regime: str
+    impacts_per_period: int | None = None
+    period_cycles: int | None = None
+    corner_sequence: list[str] = field(default_factory=list)
+    strobe_mismatch: float = math.nan
+    max_exponent: float | None = None
+    max_exponent_error: float | None = None
+    zero_one: float | None = None
+    confidence: float = 0.0
+    transient_used: int = 0
+    evidence: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.regime not in REGIMES:
+            raise ValueError(f"regime = {self.regime!r}: must be one of {', '.join(REGIMES)}")
+
+    @property
+    def label(self) -> str:
+        """Short label: "group-periodic 3-1", "periodic 1-2", "chaotic", ... (n-P)."""
+        if self.regime in ("periodic", "group-periodic"):
+            return f"{self.regime} {self.impacts_per_period}-{self.period_cycles}"
+        return self.regime
+
+    def to_json_dict(self) -> dict:
+        """JSON-ready dict (non-finite floats are left to the writer)."""
+        return {
+            "regime": self.regime,
+            "label": self.label,
+            "impacts_per_period": self.impacts_per_period,
+            "period_cycles": self.period_cycles,
+            "corner_sequence": list(self.corner_sequence),
+            "strobe_mismatch": float(self.strobe_mismatch),
+            "max_exponent": self.max_exponent,
+            "max_exponent_error": self.max_exponent_error,
+            "zero_one": self.zero_one,
+            "confidence": float(self.confidence),
+            "transient_used": int(self.transient_used),
+            "evidence": _plain(self.evidence),
+        }
+
+
+# =============================================================== classify
+def classify(
+    system_or_scene: System | Scene,
+    *,
+    min_transient: int = 40,
+    max_transient: int = 2000,
+    chunk: int = 20,
+    window: int | None = None,
+    max_period: int = 16,
+    tol: float | None = None,
+    lyapunov_cycles: int = 200,
+    test01: bool = True,
+) -> Regime:
+    """Classify the steady response of a pounding scene.
+
+    Parameters
+    ----------
+    system_or_scene : System or Scene
+        A scene, or a system made from one (:meth:`System.from_scene`; its
+        solver settings and initial state are used).
+    min_transient, max_transient, chunk : int
+        Adaptive transient, in excitation cycles: at least ``min_transient``,
+        then ``chunk`` more at a time until the section has converged to a
+        period <= ``max_period``, at most ``max_transient``.
+    window : int, optional
+        Record window in cycles (default ``max(4 max_period, 32)``, at least
+        ``2 max_period``).
+    max_period : int
+        Longest period searched, in cycles.
+    tol : float, optional
+        Relative stroboscopic mismatch accepted as a repeat (default
+        ``1e3 * rtol_used``, 1e-5 for rtol <= 1e-8).
+    lyapunov_cycles : int
+        Cycles averaged for the largest exponent (only without a period).
+    test01 : bool
+        Run the 0-1 test (only without a period).
+
+    Returns
+    -------
+    Regime
+        With ``transient_used`` and the evidence of every rule applied.
+
+    Raises
+    ------
+    ValueError
+        Bad arguments, or a system without a pounding scene.
+    chaospound.simulate.SimulationError
+        A run that could not finish.
+    """
+    from ..simulate import simulate
+    from .lyapunov import lyapunov_spectrum
+
+    system = as_system(system_or_scene)
+    if system.scene is None:
+        raise ValueError(
+            f"system {system.name!r} has no pounding scene: classify needs impacts "
+            "(use System.from_scene or pass a Scene)"
+        )
+    window = max(4 * max_period, 32) if window is None else int(window)
+    _check_arguments(min_transient, max_transient, chunk, window, max_period, lyapunov_cycles)
+    scene, rtol_used, atol_used = _classification_scene(system)
+    tol = TOL_PER_RTOL * rtol_used if tol is None else _check_tol(tol)
+    weights = _length_weights(scene, system.state_names)
+    start = np.asarray(system.initial_state, dtype=float)
+
+    # 1. adaptive transient, 2. record window; a window whose period differs from the
+    # one its last sections have converged to was still transient: count it and go on
+    run = simulate(scene, transient=0, record=min_transient, initial_state=start)
+    sections, done = [run.strobe.state], min_transient
+    while True:
+        tail = np.concatenate(sections)[-(_tail_length(max_period)):] * weights
+        converged = _converged_period(tail, max_period, TRANSIENT_MARGIN * tol)
+        if converged is None and done < max_transient:
+            cycles = min(chunk, max_transient - done)
+            run = simulate(scene, transient=0, record=cycles, initial_state=sections[-1][-1],
+                           start_at_section=True)
+            sections.append(run.strobe.state[1:])
+            done += cycles
+            continue
+        record = simulate(scene, transient=0, record=window, initial_state=sections[-1][-1],
+                          start_at_section=True)
+        imp = record.impacts
+        local_phase = _phase_from_section(imp.time, imp.cycle, record.period, scene.run.phase)
+        regime = classify_sequence(
+            record.strobe.state * weights, imp.cycle, local_phase, imp.velocity, imp.labels,
+            max_period=max_period, tol=tol, test01=False,
+        )
+        at_end = _converged_period(record.strobe.state[-(_tail_length(max_period)):] * weights,
+                                   max_period, tol)
+        if regime.period_cycles == at_end or done + window > max_transient:
+            break
+        sections, done = [record.strobe.state], done + window
+
+    evidence = {
+        "rtol": rtol_used,
+        "atol": atol_used,
+        "method": scene.solver.method,
+        "model": record.model,
+        "window_cycles": window,
+        "transient_converged_period": converged,
+        "window_end_period": at_end,
+        "impacts_in_window": len(imp),
+        "impacts_per_cycle": len(imp) / window,
+    }
+    if regime.regime != "unresolved" or not len(imp):
+        return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
+
+    # 3. no period: a longer record for the 0-1 test, then the largest exponent
+    states, last = record.strobe.state, record.strobe.state[-1]
+    cycles, velocity, labels = imp.cycle, imp.velocity, imp.labels
+    if test01 and states.shape[0] < ZERO_ONE_CYCLES + 1:
+        more = simulate(scene, transient=0, record=ZERO_ONE_CYCLES + 1 - states.shape[0],
+                        initial_state=last, start_at_section=True)
+        states, last = np.concatenate([states, more.strobe.state[1:]]), more.strobe.state[-1]
+        extra = more.impacts
+        cycles = np.concatenate([cycles, extra.cycle + window])
+        local_phase = np.concatenate(
+            [local_phase, _phase_from_section(extra.time, extra.cycle, more.period,
+                                              scene.run.phase)])
+        velocity = np.concatenate([velocity, extra.velocity])
+        labels = labels + extra.labels
+    spectrum = lyapunov_spectrum(System.from_scene(scene), k=1, transient=0,
+                                 cycles=lyapunov_cycles, initial_state=last)
+    regime = classify_sequence(
+        states * weights, cycles, local_phase, velocity, labels,
+        max_period=max_period, tol=tol, exponent=spectrum.max_exponent,
+        exponent_error=spectrum.max_error, test01=test01,
+    )
+    evidence.update(
+        lyapunov_cycles=lyapunov_cycles,
+        exponent_per_cycle=spectrum.max_exponent * spectrum.period,
+        zero_one_points=int(states.shape[0]) if test01 else 0,
+    )
+    return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
+
+
+# ====================================================== classify_sequence
+def classify_sequence(
+    strobe_states: np.ndarray,
+    impact_cycles: Sequence[int],
+    impact_phases: Sequence[float],
+    impact_velocities: Sequence[float],
+    impact_corners: Sequence[str] | Sequence[int],
+    *,
+    max_period: int = 16,
+    tol: float = DEFAULT_TOL,
+    exponent: float | None = None,
+    exponent_error: float | None = None,
+    test01: bool = True,
+) -> Regime:
+    """Classify a recorded steady response from its sections and impacts.
+
+    The pure-data core of :func:`classify` (rules 2 and 4-7 of the module
+    docstring); ``transient_used`` is 0.
+
+    Parameters
+    ----------
+    strobe_states : ndarray (N + 1, n) or (N + 1,)
+        Consecutive stroboscopic states (one per excitation cycle), in
+        comparable units (classify scales rotations by rho).
+    impact_cycles, impact_phases, impact_velocities, impact_corners : sequences
+        One entry per impact of the same window, in time order: cycle index
+        k, phase within the cycle in [0, 1) (classify counts it from the
+        section; ``Impacts.phase``, (t mod T)/T, also works: only
+        differences between impacts P cycles apart matter), relative
+        velocity V (A_g omega_Ax) and corner label ("A+", ...) or code
+        (:data:`CORNER_LABELS`). ``corner_sequence`` starts with the first
+        impact.
+    max_period : int
+        Longest period searched, in cycles.
+    tol : float
+        Relative stroboscopic mismatch accepted as a repeat.
+    exponent, exponent_error : float, optional
+        Largest Lyapunov exponent and its standard error, used when no period
+        is found; without them the 0-1 test decides.
+    test01 : bool
+        Run the 0-1 test on the sections when no period is found.
+
+    Returns
+    -------
+    Regime
+    """
+    states = np.asarray(strobe_states, dtype=float)
+    if states.ndim == 1:
+        states = states[:, None]
+    if states.ndim != 2 or states.shape[0] < 3 or not np.all(np.isfinite(states)):
+        raise ValueError(
+            f"strobe_states has shape {np.shape(strobe_states)}: need at least 3 finite sections"
+        )
+    if int(max_period) < 1:
+        raise ValueError(f"max_period = {max_period}: must be an integer >= 1")
+    tol = _check_tol(tol)
+    impacts = _impact_table(impact_cycles, impact_phases, impact_velocities, impact_corners)
+    max_period = min(int(max_period), (states.shape[0] - 1) // 2)
+    scale = _scale(states)
+    mismatches = {p: _mismatch(states, p, scale) for p in range(1, max_period + 1)}
+    evidence: dict = {
+        "tol": tol,
+        "scale": scale,
+        "sections": int(states.shape[0]),
+        "mismatch_by_period": {str(p): m for p, m in mismatches.items()},
+    }
+    period, group = None, None
+    for p in range(1, max_period + 1):
+        if mismatches[p] < tol:
+            group = _repeating_group(impacts, p, tol, states.shape[0] - 1)
+            if group is not None:
+                period = p
+                break
+    best = period if period is not None else min(mismatches, key=mismatches.get)
+    mismatch = mismatches[best] if mismatches else math.nan
+    evidence["best_period"] = best
+
+    if impacts.n == 0:
+        motion = next((p for p in range(1, max_period + 1) if mismatches[p] < tol), None)
+        return Regime("none", impacts_per_period=0, period_cycles=motion,
+                      strobe_mismatch=mismatches[motion] if motion else mismatch,
+                      confidence=1.0 if motion else 0.5, evidence=evidence)
+    if period is not None:
+        n = len(group)
+        return Regime(
+            "periodic" if n <= period else "group-periodic",
+            impacts_per_period=n,
+            period_cycles=period,
+            corner_sequence=group,
+            strobe_mismatch=mismatch,
+            confidence=_mismatch_confidence(mismatch, tol),
+            evidence=evidence,
+        )
+    zero_one = None
+    if test01 and states.shape[0] >= ZERO_ONE_MIN_POINTS:
+        zero_one = zero_one_test(_principal_component(states))
+    regime, confidence = _aperiodic_regime(exponent, exponent_error, zero_one, evidence)
+    return Regime(
+        regime,
+        strobe_mismatch=mismatch,
+        max_exponent=None if exponent is None else float(exponent),
+        max_exponent_error=None if exponent_error is None else float(exponent_error),
+        zero_one=zero_one,
+        confidence=confidence,
+        evidence=evidence,
+    )
+
+
+# ========================================================== 0-1 test
+def zero_one_test(
+    observable: Sequence[float],
+    *,
+    c_values: int | Sequence[float] = 100,
+    seed: int = 0,
+) -> float:
+    """The 0-1 test for chaos (Gottwald & Melbourne 2004, 2009): K in about [0, 1].
+
+    For each c, the translation variables ``p_c(n) = sum_{j<=n} phi_j cos(j c)``
+    and ``q_c(n) = sum_{j<=n} phi_j sin(j c)`` are built; the modified mean
+    square displacement ``D_c(n) = M_c(n) - (mean phi)^2 (1 - cos n c) /
+    (1 - cos c)``, with ``M_c(n)`` the mean of ``|z(j + n) - z(j)|^2`` over j,
+    grows linearly in n for chaotic data and stays bounded for regular data;
+    ``K_c`` is the correlation of ``D_c(n)`` with n for n = 1 .. N/10, and K
+    the median of ``K_c`` over the c values (Gottwald & Melbourne 2009, SIAM
+    J. Appl. Dyn. Syst. 8, 129, "On the implementation of the 0-1 test").
+
+    Parameters
+    ----------
+    observable : sequence of float
+        A scalar observable sampled once per excitation cycle (or map step),
+        at least 20 values.
+    c_values : int or sequence of float
+        Number of c drawn uniformly from (pi/5, 4 pi/5), or the c values.
+    seed : int
+        Seed of the random c values (reproducible K).
+
+    Returns
+    -------
+    float
+        K: near 1 for chaotic, near 0 for periodic or quasi-periodic data.
+    """
+    phi = np.asarray(observable, dtype=float).ravel()
+    if phi.size < 20 or not np.all(np.isfinite(phi)):
+        raise ValueError(f"observable has {phi.size} values: need at least 20 finite values")
+    if isinstance(c_values, int | np.integer):
+        if c_values < 1:
+            raise ValueError(f"c_values = {c_values}: must be >= 1")
+        c = np.random.default_rng(seed).uniform(*ZERO_ONE_C_RANGE, size=int(c_values))
+    else:
+        c = np.asarray(c_values, dtype=float).ravel()
+        if c.size == 0 or np.any(np.cos(c) >= 1.0 - 1e-12):
+            raise ValueError("c_values: need at least one c with cos(c) < 1")
+    spread = float(np.ptp(phi))
+    if spread == 0.0:
+        return 0.0  # a constant signal is regular (and D_c would be 0 / 0)
+    n_total = phi.size
+    n_cut = max(n_total // 10, 3)
+    j = np.arange(1, n_total + 1)
+    z = np.cumsum(phi[None, :] * np.exp(1j * np.outer(c, j)), axis=1)
+    lags = np.arange(1, n_cut + 1)
+    msd = np.empty((c.size, n_cut))
+    for i, n in enumerate(lags):
+        msd[:, i] = np.mean(np.abs(z[:, n:] - z[:, :-n]) ** 2, axis=1)
+    oscillation = np.mean(phi) ** 2 * (1.0 - np.cos(np.outer(c, lags))) / (1.0 - np.cos(c))[:, None]
+    displacement = msd - oscillation
+    k_c = np.array([_correlation(lags, row) for row in displacement])
+    return float(np.median(k_c))
+
+
+# ================================================================ helpers
+def _check_arguments(min_transient, max_transient, chunk, window, max_period, lyapunov_cycles):
+    if int(max_period) < 1:
+        raise ValueError(f"max_period = {max_period}: must be an integer >= 1")
+    if int(min_transient) < 1:
+        raise ValueError(f"min_transient = {min_transient}: must be an integer >= 1")
+    if int(max_transient) < int(min_transient):
+        raise ValueError(
+            f"max_transient = {max_transient}: must be >= min_transient = {min_transient}"
+        )
+    if int(chunk) < 1:
+        raise ValueError(f"chunk = {chunk}: must be an integer >= 1")
+    if int(window) < 2 * int(max_period):
+        raise ValueError(f"window = {window}: must be >= 2 max_period = {2 * int(max_period)}")
+    if int(lyapunov_cycles) < 10:
+        raise ValueError(f"lyapunov_cycles = {lyapunov_cycles}: must be an integer >= 10")
+
+
+def _check_tol(tol: float) -> float:
+    tol = float(tol)
+    if not (math.isfinite(tol) and tol > 0.0):
+        raise ValueError(f"tol = {tol}: must be a finite number > 0")
+    return tol
+
+
+def _classification_scene(system: System) -> tuple[Scene, float, float]:
+    """The system's scene with its solver settings, rtol <= 1e-8 (rule 1)."""
+    settings = {
+        "method": system.method,
+        "steps_per_cycle": system.steps_per_cycle,
+        "max_steps": system.max_steps,
+        "restart_at_kinks": system.restart_at_kinks,
+    }
+    if system.method == "rk4":
+        return system.scene.with_params(**settings), CLASSIFY_RTOL, math.nan
+    rtol = min(system.rtol, CLASSIFY_RTOL)
+    atol = min(system.atol, ATOL_PER_RTOL * rtol)
+    return system.scene.with_params(rtol=rtol, atol=atol, **settings), rtol, atol
+
+
+def _phase_from_section(time, cycle, period, section_phase) -> np.ndarray:
+    """Phase of each impact within its cycle, counted from the section, in [0, 1)."""
+    return np.clip(np.asarray(time) / period - section_phase - np.asarray(cycle), 0.0, None)
+
+
+def _length_weights(scene: Scene, state_names: Sequence[str]) -> np.ndarray:
+    """Per-component factors putting the state in lengths and velocities (rule 2)."""
+    rho = {"A": scene.tower_A.rho, "B": scene.tower_B.rho}
+    return np.array([rho[name[-1]] if name.lstrip("d").startswith("th_") else 1.0
+                     for name in state_names])
+
+
+def _tail_length(max_period: int) -> int:
+    """Sections the convergence test looks at: enough for every P <= max_period."""
+    return max(3 * max_period, TAIL_MIN + max_period) + 1
+
+
+def _scale(states: np.ndarray) -> float:
+    """Largest Euclidean norm of the section points (1 for an all-zero record)."""
+    scale = float(np.max(np.linalg.norm(states, axis=1)))
+    return scale if scale > 0.0 else 1.0
+
+
+def _mismatch(states: np.ndarray, period: int, scale: float) -> float:
+    """max_k |x_{k+P} - x_k| / scale over the record."""
+    return float(np.max(np.linalg.norm(states[period:] - states[:-period], axis=1)) / scale)
+
+
+def _converged_period(states: np.ndarray, max_period: int, tol: float) -> int | None:
+    """Smallest P whose last max(2P, TAIL_MIN) mismatches are all below tol (rule 3)."""
+    scale = _scale(states)
+    last = states.shape[0] - 1
+    for p in range(1, max_period + 1):
+        comparisons = max(2 * p, TAIL_MIN)
+        if last < comparisons + p - 1:
+            break
+        if _mismatch(states[last - comparisons - p + 1:], p, scale) < tol:
+            return p
+    return None
+
+
+@dataclass(frozen=True)
+class _Impacts:
+    time: np.ndarray  # cycle + phase, in cycles
+    velocity: np.ndarray
+    labels: list[str]
+
+    @property
+    def n(self) -> int:
+        return int(self.time.shape[0])
+
+
+def _impact_table(cycles, phases, velocities, corners) -> _Impacts:
+    cycles = np.asarray(cycles, dtype=float).ravel()
+    phases = np.asarray(phases, dtype=float).ravel()
+    velocities = np.asarray(velocities, dtype=float).ravel()
+    labels = [CORNER_LABELS[int(c)] if isinstance(c, int | np.integer) else str(c)
+              for c in corners]
+    sizes = {cycles.size, phases.size, velocities.size, len(labels)}
+    if len(sizes) != 1:
+        raise ValueError(
+            f"impact arrays have {cycles.size}, {phases.size}, {velocities.size} and "
+            f"{len(labels)} entries: need one of each per impact"
+        )
+    unknown = sorted(set(labels) - set(CORNER_LABELS))
+    if unknown:
+        raise ValueError(f"impact corner {unknown[0]!r}: must be one of {', '.join(CORNER_LABELS)}")
+    time = cycles + phases
+    if not (np.all(np.isfinite(time)) and np.all(np.isfinite(velocities))):
+        raise ValueError("impact cycles, phases and velocities must be finite")
+    return _Impacts(time=time - cycles.min() if cycles.size else time, velocity=velocities,
+                    labels=labels)
+
+
+def _repeating_group(impacts: _Impacts, period: int, tol: float, cycles: int) -> list[str] | None:
+    """Corner labels of one period if the impacts repeat every ``period`` cycles, else None.
+
+    Impact i + n must follow impact i by ``period`` cycles, at the same corner
+    and with the same velocity, n being the number of impacts in one period,
+    and the impacts must span the record of ``cycles`` cycles but one period.
+    """
+    if impacts.n == 0:
+        return []
+    time, velocity, labels = impacts.time, impacts.velocity, impacts.labels
+    shift = int(np.argmin(np.abs(time - (time[0] + period))))
+    if shift == 0 or abs(time[shift] - time[0] - period) > IMPACT_TOL_FACTOR * tol:
+        return None
+    if time[-1] - time[0] < cycles - 2 * period:
+        return None
+    v_scale = max(float(np.max(np.abs(velocity))), 1e-12)
+    gaps = time[shift:] - time[:-shift]
+    same_corner = all(a == b for a, b in zip(labels[shift:], labels[:-shift], strict=True))
+    if (
+        not same_corner
+        or np.max(np.abs(gaps - period)) > IMPACT_TOL_FACTOR * tol
+        or np.max(np.abs(velocity[shift:] - velocity[:-shift])) > IMPACT_TOL_FACTOR * tol * v_scale
+    ):
+        return None
+    return labels[:shift]
+
+
+def _aperiodic_regime(exponent, error, zero_one, evidence) -> tuple[str, float]:
+    """Rules 6 and 7: (regime, confidence) without a period."""
+    k_chaos = None if zero_one is None else _clip(
+        (zero_one - ZERO_ONE_REGULAR) / (ZERO_ONE_CHAOTIC - ZERO_ONE_REGULAR))
+    k_regular = None if zero_one is None else _clip(
+        (ZERO_ONE_REGULAR - zero_one) / ZERO_ONE_REGULAR)
+    if exponent is not None and error is not None and math.isfinite(exponent):
+        z = float(exponent) / max(float(error), 1e-300)
+        evidence["exponent_over_error"] = z
+        if z > SIGMAS and (zero_one is None or zero_one >= ZERO_ONE_REGULAR):
+            parts = [_clip((z - SIGMAS) / (Z_FULL_CONFIDENCE - SIGMAS)), k_chaos]
+            return "chaotic", min(p for p in parts if p is not None)
+        if abs(z) <= SIGMAS and (zero_one is None or zero_one < ZERO_ONE_REGULAR):
+            parts = [_clip(1.0 - abs(z) / SIGMAS), k_regular]
+            return "quasi-periodic", min(p for p in parts if p is not None)
+        return "unresolved", 0.0
+    if zero_one is None:
+        return "unresolved", 0.0
+    if zero_one > ZERO_ONE_CHAOTIC:
+        return "chaotic", k_chaos
+    if zero_one < ZERO_ONE_REGULAR:
+        return "quasi-periodic", k_regular
+    return "unresolved", 0.0
+
+
+def _mismatch_confidence(mismatch: float, tol: float) -> float:
+    if mismatch <= 0.0:
+        return 1.0
+    return _clip(math.log10(tol / mismatch) / MISMATCH_DECADES)
+
+
+def _principal_component(states: np.ndarray) -> np.ndarray:
+    """The scaled sections projected on their direction of largest variance."""
+    centred = states - states.mean(axis=0)
+    if states.shape[1] == 1:
+        return states[:, 0]
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    return states @ vt[0]
+
+
+def _correlation(x: np.ndarray, y: np.ndarray) -> float:
+    sx, sy = np.std(x), np.std(y)
+    if sx == 0.0 or sy == 0.0:
+        return 0.0
+    return float(np.mean((x - x.mean()) * (y - y.mean())) / (sx * sy))
+
+
+def _clip(value: float) -> float:
+    return float(min(max(value, 0.0), 1.0))
+
+
+def _plain(value):
+    """Evidence as JSON types (numpy scalars to Python numbers)."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.floating):
+        return float(value)
+    return value

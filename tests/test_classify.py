@@ -1,0 +1,328 @@
+"""Regime classification: synthetic sequences, the 0-1 test, and the paper's responses.
+
+Synthetic data test each rule of docs/classification.md in isolation (periods
+and impacts that repeat or do not, quasi-periodic and chaotic sections); the
+scenes test the physics: the paper's group-periodic 3-1 at T/T_Ax = 0.70 with
+impacts at two corners of one tower around one of the other, the chaotic
+torsional response at 0.9, and the translational model, which needs no torsion
+to be periodic.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from chaospound.cli import main
+from chaospound.dynamics.classify import (
+    DEFAULT_TOL,
+    REGIMES,
+    Regime,
+    classify,
+    classify_sequence,
+    zero_one_test,
+)
+from chaospound.dynamics.system import System, duffing
+from chaospound.scene import load_preset
+
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+JSON_KEYS = {
+    "regime", "label", "impacts_per_period", "period_cycles", "corner_sequence",
+    "strobe_mismatch", "max_exponent", "max_exponent_error", "zero_one", "confidence",
+    "transient_used", "scene", "model",
+}  # fmt: skip
+
+
+# ========================================================== synthetic data
+def periodic_record(period, group, cycles=64, noise=1e-7, seed=0):
+    """Sections of period ``period`` and impacts ``group`` = [(cycle offset, phase, V, corner)].
+
+    Every period repeats the group; the sections and the impact phases and
+    velocities carry Gaussian noise of relative size ``noise`` (below tol).
+    """
+    rng = np.random.default_rng(seed)
+    base = rng.uniform(-1.0, 1.0, size=(period, 4))
+    states = base[np.arange(cycles + 1) % period] + noise * rng.normal(size=(cycles + 1, 4))
+    rows = [
+        (start + offset, phase, velocity, corner)
+        for start in range(0, cycles, period)
+        for offset, phase, velocity, corner in group
+        if start + offset < cycles
+    ]
+    k, phase, velocity, corner = (list(column) for column in zip(*rows, strict=True))
+    phase = np.array(phase) + noise * rng.normal(size=len(phase))
+    velocity = np.array(velocity) * (1.0 + noise * rng.normal(size=len(velocity)))
+    return states, np.array(k), phase, velocity, corner
+
+
+def logistic(n, r=4.0, x0=0.3141):
+    x = np.empty(n)
+    x[0] = x0
+    for i in range(n - 1):
+        x[i + 1] = r * x[i] * (1.0 - x[i])
+    return x
+
+
+def one_impact_per_cycle(velocities):
+    """One A+ impact per cycle with the given velocities and phases following them."""
+    n = len(velocities)
+    return np.arange(n), 0.2 + 0.1 * np.tanh(velocities), np.asarray(velocities), ["A+"] * n
+
+
+@pytest.mark.parametrize(
+    ("period", "group", "label"),
+    [
+        (1, [(0, 0.3, 2.0, "face")], "periodic 1-1"),
+        (2, [(1, 0.6, 1.5, "face")], "periodic 1-2"),
+        (4, [(2, 0.1, 0.9, "A+")], "periodic 1-4"),
+        (1, [(0, 0.63, 3.6, "A+"), (0, 0.72, 5.9, "B-"), (0, 0.81, 2.9, "A+")],
+         "group-periodic 3-1"),
+        (2, [(0, 0.1, 1.0, "A+"), (0, 0.5, 2.0, "B-"), (0, 0.9, 1.2, "A-"),
+             (1, 0.3, 0.7, "B+"), (1, 0.6, 1.1, "A+")], "group-periodic 5-2"),
+    ],
+)  # fmt: skip
+def test_synthetic_periodic_sequences(period, group, label):
+    regime = classify_sequence(*periodic_record(period, group))
+    assert regime.label == label
+    assert regime.period_cycles == period
+    assert regime.impacts_per_period == len(group)
+    assert regime.corner_sequence == [corner for *_, corner in group]
+    assert regime.strobe_mismatch < DEFAULT_TOL
+    assert regime.confidence > 0.5
+    assert regime.max_exponent is None and regime.zero_one is None  # not needed with a period
+
+
+def test_noise_above_tol_is_not_a_period():
+    """The same period-1 record with section noise 10 tol: no period, rules 6-7 decide."""
+    states, *impacts = periodic_record(1, [(0, 0.3, 2.0, "face")], noise=1e-4)
+    regime = classify_sequence(states, *impacts)
+    assert regime.period_cycles is None
+    assert regime.strobe_mismatch > DEFAULT_TOL
+    assert regime.regime == "unresolved"  # 65 sections: too few for the 0-1 test
+
+
+def test_impacts_must_repeat_as_well_as_the_section():
+    """Sections of period 1 but impact corners alternating A+, B-: the period is 2 (2-2)."""
+    states, k, phase, velocity, _ = periodic_record(1, [(0, 0.3, 2.0, "A+")])
+    corners = ["A+" if c % 2 == 0 else "B-" for c in k]
+    regime = classify_sequence(states, k, phase, velocity, corners)
+    assert regime.label == "periodic 2-2"
+    assert regime.corner_sequence == ["A+", "B-"]
+    # impact phases that drift by 1e-3 per cycle never repeat
+    drifting = phase + 1e-3 * k
+    assert classify_sequence(states, k, drifting, velocity, ["A+"] * len(k)).regime == "unresolved"
+
+
+def test_impacts_that_stop_do_not_repeat():
+    """Impacts in the first half of the window only: no period, whatever the sections say."""
+    states, k, phase, velocity, corners = periodic_record(1, [(0, 0.3, 2.0, "face")])
+    half = k < 32
+    regime = classify_sequence(states, k[half], phase[half], velocity[half],
+                               [c for c, h in zip(corners, half, strict=True) if h])
+    assert regime.period_cycles is None
+
+
+def test_quasi_periodic_rotation():
+    """x_k = (cos 2 pi k w, sin 2 pi k w), w the golden mean: no period, K ~ 0."""
+    k = np.arange(1001)
+    states = np.column_stack([np.cos(2 * np.pi * GOLDEN * k), np.sin(2 * np.pi * GOLDEN * k)])
+    regime = classify_sequence(states, *one_impact_per_cycle(states[:-1, 0]))
+    assert regime.regime == "quasi-periodic"
+    assert regime.zero_one < 0.2
+    assert regime.period_cycles is None and regime.corner_sequence == []
+
+
+def test_chaotic_logistic_map():
+    x = logistic(1001)
+    regime = classify_sequence(x, *one_impact_per_cycle(x[:-1]))
+    assert regime.regime == "chaotic"
+    assert regime.zero_one > 0.8
+    assert regime.confidence > 0.5
+
+
+def test_no_impacts_is_none_with_the_period_of_the_motion():
+    states, *_ = periodic_record(2, [(0, 0.3, 1.0, "face")])
+    regime = classify_sequence(states, [], [], [], [])
+    assert regime.label == "none"
+    assert regime.impacts_per_period == 0
+    assert regime.period_cycles == 2
+
+
+@pytest.mark.parametrize(
+    ("exponent", "error", "expected"),
+    [(0.09, 0.01, "chaotic"), (0.01, 0.01, "quasi-periodic"), (-0.05, 0.005, "unresolved")],
+)
+def test_exponent_rule_without_the_01_test(exponent, error, expected):
+    """MODEL.md 5: chaotic beyond 3 standard errors, ~0 within them, < 0 without a period."""
+    x = logistic(101)
+    regime = classify_sequence(x, *one_impact_per_cycle(x[:-1]), exponent=exponent,
+                               exponent_error=error, test01=False)
+    assert regime.regime == expected
+    assert regime.max_exponent == exponent and regime.zero_one is None
+
+
+def test_the_01_test_vetoes_an_exponent_it_contradicts():
+    """A 'positive' exponent on quasi-periodic data (K ~ 0) is not called chaotic."""
+    k = np.arange(1001)
+    x = np.cos(2 * np.pi * GOLDEN * k)
+    regime = classify_sequence(x, *one_impact_per_cycle(x[:-1]), exponent=0.05,
+                               exponent_error=0.001)
+    assert regime.regime == "unresolved"
+
+
+def test_bad_sequences_are_rejected_with_one_line():
+    states = np.zeros((10, 2))
+    with pytest.raises(ValueError, match="entries"):
+        classify_sequence(states, [0, 1], [0.1], [1.0], ["A+"])
+    with pytest.raises(ValueError, match="corner 'C'"):
+        classify_sequence(states, [0], [0.1], [1.0], ["C"])
+    with pytest.raises(ValueError, match="tol"):
+        classify_sequence(states, [], [], [], [], tol=-1.0)
+    with pytest.raises(ValueError, match="finite"):
+        classify_sequence(states, [0], [math.nan], [1.0], ["A+"])
+
+
+# ================================================================ 0-1 test
+def test_zero_one_separates_chaos_from_regular_signals():
+    k = np.arange(1000)
+    assert zero_one_test(logistic(1000)) > 0.8
+    assert zero_one_test(np.tile([0.1, 0.7, 0.4], 334)[:1000]) < 0.2  # period 3
+    assert zero_one_test(np.cos(2 * np.pi * GOLDEN * k)) < 0.2  # quasi-periodic
+    # the modified mean-square displacement removes the mean's oscillation
+    assert zero_one_test(5.0 + np.cos(2 * np.pi * GOLDEN * k)) < 0.2
+
+
+def test_zero_one_is_reproducible_and_accepts_explicit_c():
+    x = logistic(500)
+    assert zero_one_test(x, seed=3) == zero_one_test(x, seed=3)
+    assert zero_one_test(x, c_values=[1.0, 1.7, 2.3]) > 0.8
+    with pytest.raises(ValueError, match="at least 20"):
+        zero_one_test(x[:10])
+
+
+# ============================================================ scenes: physics
+def test_fig3a_is_group_periodic_3_1_at_corners_c_f_c():
+    """Paper Fig. 3(a), T/T_Ax = 0.70: three impacts per cycle, corners C, F, C."""
+    regime = classify(load_preset("fig3a"))
+    assert regime.regime == "group-periodic"
+    assert (regime.impacts_per_period, regime.period_cycles) == (3, 1)
+    first, second, third = regime.corner_sequence
+    assert first == third != "face"
+    assert second[0] != first[0]  # the middle impact is at the other tower's corner
+    assert regime.strobe_mismatch < 1e-2 * regime.evidence["tol"]
+    assert regime.evidence["rtol"] <= 1e-8  # the classification tightened rtol 1e-6
+    assert 40 <= regime.transient_used < 2000
+
+
+def test_group_periodicity_does_not_depend_on_the_section_phase():
+    """Same orbit seen from another section phase: same n-P, corners rotated."""
+    base = classify(load_preset("fig3a"))
+    shifted = classify(load_preset("fig3a").with_params(phase=0.7))
+    assert shifted.label == base.label
+    sequence = base.corner_sequence
+    rotations = [sequence[i:] + sequence[:i] for i in range(len(sequence))]
+    assert shifted.corner_sequence in rotations
+    assert shifted.corner_sequence != sequence  # the impact at phase 0.72 now comes first
+
+
+def test_fig4_periodic_and_impact_free_points():
+    """T/T_Ax = 1.3 pounds once per cycle; at 1.5 the steady response is periodic but
+    never touches (relative amplitude 0.55 < gap): MODEL.md 5 calls it 'none'."""
+    pounding = classify(load_preset("fig4").with_params(period_ratio=1.3))
+    assert pounding.label == "periodic 1-1"
+    free = classify(load_preset("fig4").with_params(period_ratio=1.5))
+    assert free.regime == "none"
+    assert free.period_cycles == 1
+    assert free.strobe_mismatch < free.evidence["tol"]
+
+
+def test_fig4_at_0_9_is_chaotic():
+    """Largest exponent about +0.09 +- 0.01 per unit time, K near 1."""
+    regime = classify(load_preset("fig4").with_params(period_ratio=0.9))
+    assert regime.regime == "chaotic"
+    assert regime.period_cycles is None
+    assert regime.max_exponent > 3 * regime.max_exponent_error
+    assert abs(regime.max_exponent - 0.09) < 3 * regime.max_exponent_error + 0.01
+    assert regime.zero_one > 0.8
+    assert regime.strobe_mismatch > 1e3 * regime.evidence["tol"]
+    assert regime.transient_used == 2000  # never converged
+
+
+@pytest.mark.parametrize(("period_ratio", "label"), [(0.7, "periodic 1-1"), (1.3, "periodic 1-2")])
+def test_translational_pounding_is_not_group_periodic(period_ratio, label):
+    """The pair model (no torsion): periodic face impacts, not groups (the paper, 3.2)."""
+    regime = classify(load_preset("fig4-translational").with_params(period_ratio=period_ratio))
+    assert regime.evidence["model"] == "pair"
+    assert regime.regime != "group-periodic"
+    assert regime.label == label
+    assert set(regime.corner_sequence) == {"face"}
+
+
+def test_system_and_scene_give_the_same_regime():
+    scene = load_preset("fig4").with_params(period_ratio=1.3)
+    assert classify(System.from_scene(scene)).label == classify(scene).label
+
+
+def test_classify_rejects_bad_arguments():
+    scene = load_preset("fig3a")
+    with pytest.raises(ValueError, match="max_transient"):
+        classify(scene, min_transient=50, max_transient=10)
+    with pytest.raises(ValueError, match="window"):
+        classify(scene, window=10, max_period=16)
+    with pytest.raises(ValueError, match="no pounding scene"):
+        classify(duffing())
+
+
+def test_regime_json_and_label():
+    regime = Regime("group-periodic", impacts_per_period=3, period_cycles=1,
+                    corner_sequence=["A+", "B-", "A+"], strobe_mismatch=1e-8, confidence=1.0)
+    assert regime.label == "group-periodic 3-1"
+    assert json.loads(json.dumps(regime.to_json_dict()))["label"] == "group-periodic 3-1"
+    assert Regime("chaotic").label == "chaotic"
+    assert set(REGIMES) >= {"none", "unresolved"}
+    with pytest.raises(ValueError, match="regime"):
+        Regime("weird")
+
+
+# ====================================================================== CLI
+def test_cli_classify_json(capsys):
+    code = main(["classify", "--preset", "fig3a", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    document = json.loads(out)
+    assert JSON_KEYS <= set(document)
+    assert document["label"] == "group-periodic 3-1"
+    assert document["model"] == "towers"
+    assert document["scene"]["name"] == "fig3a"
+
+
+def test_cli_classify_report_and_plot(capsys, tmp_path: Path):
+    figure = tmp_path / "fig3a.png"
+    code = main(["classify", "--preset", "fig3a", "--plot", str(figure)])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "group-periodic 3-1" in out and "A+ B- A+" in out
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        ["--preset", "nosuch"],
+        ["--preset", "fig3a", "--set", "gap=-1"],
+        ["--preset", "fig3a", "--max-transient", "10"],
+        ["--preset", "fig3a", "--window", "5"],
+        ["--preset", "fig3a", "--record", "8"],
+        ["--preset", "fig3a", "--max-period", "x"],
+    ],
+)
+def test_cli_classify_bad_input_is_one_line_exit_2(capsys, options):
+    code = main(["classify", *options])
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert out == ""
+    assert len(err.splitlines()) == 1 and err.startswith("chaospound: error: ")
