@@ -5,6 +5,8 @@ Commands::
     chaospound presets [NAME]            table of presets, or one preset's TOML
     chaospound params [NAME ...]         flat parameter names, meaning and range
     chaospound simulate (--preset NAME | SCENE.toml) [--set k=v ...] [--json] ...
+    chaospound sweep (--preset NAME | SCENE.toml) [--param NAME=GRID ...] -o FILE.h5 ...
+    chaospound plot FILE.h5 [-o FILE.png] [--branch NAME]
 
 Every command that runs a scene takes the same scene options, added by
 :func:`add_scene_options` and turned into a validated
@@ -118,7 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for add in (_add_presets, _add_params, _add_simulate, _add_lyapunov, _add_bench):
+    for add in (_add_presets, _add_params, _add_simulate, _add_lyapunov, _add_classify,
+                _add_sweep, _add_plot, _add_bench):
         add(commands)
     return parser
 
@@ -338,10 +341,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _run_simulation(scene: Scene, samples_per_cycle: int) -> Simulation:
-    """Warm the jitted kernels up on one cycle, then run (so wall_s excludes JIT loading)."""
+    """Run the scene (simulate loads the jitted kernels before its timer starts)."""
     from chaospound.simulate import simulate
 
-    simulate(scene, transient=0, record=1)
     return simulate(scene, samples_per_cycle=samples_per_cycle)
 
 
@@ -638,8 +640,10 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
     if document["full_spectrum"]:
         identity = f"{total:.6g} (trace identity {trace:.6g}, difference {total - trace:.2g})"
     else:
-        identity = (f"{total:.6g} (of {document['k']} exponents; the trace identity "
-                    f"{trace:.6g} holds for all {system.dim})")
+        identity = (
+            f"{total:.6g} (of {document['k']} exponents; the trace identity "
+            f"{trace:.6g} holds for all {system.dim})"
+        )
     summary = [
         ("sum", identity),
         ("Kaplan-Yorke dimension", f"{document['kaplan_yorke']:.4g}"
@@ -664,6 +668,466 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
         _table(None, summary, "ll"),
     ]
     return "\n\n".join(blocks) + "\n"
+
+
+# ============================================================= classify
+def _add_classify(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "classify",
+        help="classify a scene's steady response: none, periodic n-P, group-periodic n-P, "
+        "quasi-periodic, chaotic",
+        description="Classify the steady response (docs/classification.md): adaptive transient "
+        "(from --transient cycles, the minimum, to --max-transient), period and impacts per "
+        "period from the stroboscopic section and the impacts, else the largest Lyapunov "
+        "exponent and the 0-1 test. Runs with rtol <= 1e-8.",
+    )
+    add_scene_options(parser)
+    group = parser.add_argument_group("classification")
+    group.add_argument(
+        "--max-transient",
+        type=_count,
+        default=2000,
+        metavar="N",
+        help="longest transient in cycles (2000); --transient is the shortest (40)",
+    )
+    group.add_argument(
+        "--max-period", type=_count, default=16, metavar="P", help="longest period searched (16)"
+    )
+    group.add_argument(
+        "--window",
+        type=_count,
+        default=None,
+        metavar="N",
+        help="record window in cycles (default max(4 max-period, 32))",
+    )
+    group.add_argument(
+        "--lyapunov-cycles",
+        type=_count,
+        default=200,
+        metavar="N",
+        help="cycles averaged for the largest exponent when there is no period (200)",
+    )
+    group.add_argument("--no-01", action="store_true", help="skip the 0-1 test for chaos")
+    out = parser.add_argument_group("output")
+    out.add_argument("--json", action="store_true", help="print one JSON document only")
+    out.add_argument("--plot", metavar="FILE.png", help="write phase diagrams of the steady state")
+    out.add_argument("--overwrite", action="store_true", help="replace an existing --plot file")
+    parser.set_defaults(func=_cmd_classify)
+
+
+def _cmd_classify(args: argparse.Namespace) -> int:
+    from chaospound.dynamics.classify import classify
+
+    if args.record is not None:
+        raise CliError(f"--record {args.record}: not used by classify (use --window N)")
+    scene = scene_from_args(args)
+    shortest = scene.run.transient
+    if shortest < 1:
+        raise CliError(f"--transient {shortest}: the shortest transient must be >= 1 cycle")
+    if args.max_transient < shortest:
+        raise CliError(
+            f"--max-transient {args.max_transient}: must be >= the shortest transient "
+            f"{shortest} (--transient)"
+        )
+    if args.max_period < 1:
+        raise CliError(f"--max-period {args.max_period}: must be an integer >= 1")
+    if args.plot is not None:
+        check_output_path(args.plot, overwrite=args.overwrite)
+    regime = classify(
+        scene,
+        min_transient=shortest,
+        max_transient=args.max_transient,
+        window=args.window,
+        max_period=args.max_period,
+        lyapunov_cycles=args.lyapunov_cycles,
+        test01=not args.no_01,
+    )
+    if args.plot is not None:
+        _classify_save_plot(scene, regime, args.plot, overwrite=args.overwrite)
+    document = regime.to_json_dict()
+    document["model"] = regime.evidence.get("model")
+    document["scene"] = scene.to_dict()
+    if args.json:
+        _emit(_json_text(document))
+    else:
+        _emit(_classify_report(scene, regime, args.plot))
+    return EXIT_OK
+
+
+def _classify_save_plot(scene: Scene, regime, path: str, *, overwrite: bool) -> None:
+    """Phase diagrams of the classified steady state (rerun at the classification's tolerances)."""
+    from chaospound.plot import plot_phase_diagrams, save
+    from chaospound.simulate import simulate
+
+    rtol, atol = regime.evidence.get("rtol"), regime.evidence.get("atol")
+    if scene.solver.method != "rk4" and rtol is not None and math.isfinite(atol):
+        scene = scene.with_params(rtol=rtol, atol=atol)
+    record = max(2 * regime.period_cycles, 4) if regime.period_cycles else 8
+    run = simulate(scene, transient=regime.transient_used, record=record, samples_per_cycle=200)
+    fig = plot_phase_diagrams(run)
+    fig.suptitle(f"{fig.get_suptitle()}: {regime.label}")
+    check_output_path(path, overwrite=overwrite)
+    try:
+        save(fig, path)
+    except OSError as exc:
+        raise CliError(f"cannot write {path!r}: {exc.strerror or exc}") from None
+
+
+def _classify_report(scene: Scene, regime, plot: str | None) -> str:
+    """The classification as an aligned text report."""
+    evidence = regime.evidence
+    cycles = regime.period_cycles
+    period = "-" if cycles is None else f"{cycles} cycle{'' if cycles == 1 else 's'}"
+    impacts = "-" if regime.impacts_per_period is None else str(regime.impacts_per_period)
+    if regime.max_exponent is None:
+        exponent = "- (not needed: a period was found)" if regime.period_cycles else "-"
+    else:
+        period_t = scene.period
+        exponent = (
+            f"{regime.max_exponent:+.5f} +- {regime.max_exponent_error:.2g} per unit t, "
+            f"{regime.max_exponent * period_t:+.5f} +- {regime.max_exponent_error * period_t:.2g}"
+            " per cycle"
+        )
+    zero_one = "-" if regime.zero_one is None else f"{regime.zero_one:.3f}"
+    accuracy = (
+        f"{scene.solver.steps_per_cycle} steps per cycle"
+        if scene.solver.method == "rk4"
+        else f"rtol {evidence.get('rtol'):g}, atol {evidence.get('atol'):g}"
+    )
+    rows = [
+        ("scene", f"{scene.name}: {scene.description}" if scene.description else scene.name),
+        ("model", str(evidence.get("model"))),
+        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {scene.period:.6g})"),
+        ("regime", regime.label),
+        ("period", period),
+        ("impacts per period", impacts),
+        ("corner sequence", " ".join(regime.corner_sequence) or "-"),
+        ("strobe mismatch", f"{regime.strobe_mismatch:.3g} (tol {evidence.get('tol'):g}, "
+                            f"at P = {evidence.get('best_period')})"),
+        ("largest exponent", exponent),
+        ("0-1 test K", zero_one),
+        ("confidence", f"{regime.confidence:.2f}"),
+        ("transient used", f"{regime.transient_used} cycles, then a {evidence.get('window_cycles')}"
+                           "-cycle window"),
+        ("solver", f"{scene.solver.method}, {accuracy}"),
+    ]  # fmt: skip
+    if plot is not None:
+        rows.append(("wrote", plot))
+    return _table(None, rows, "ll") + "\n"
+
+
+# ================================================================ sweep
+SWEEP_CONTINUATIONS = ("none", "forward", "backward", "both")  #: as chaospound.sweep.CONTINUATIONS
+SWEEP_CLASSIFY = ("window", "full")  #: as chaospound.sweep.CLASSIFY_MODES
+
+
+def _add_sweep(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "sweep",
+        help="bifurcation scan over one or two parameters, streamed to an HDF5 file",
+        description="Run every point of a grid over one or two scene parameters to steady "
+        "state and store its impacts, stroboscopic points and regime (optionally Lyapunov "
+        "exponents) in an HDF5 file, written as the points finish; an interrupted file is "
+        "finished with --resume. Without --param the scene's [sweep] table is used "
+        "(presets fig4, fig4-translational, fig5). Read the file with "
+        "chaospound.open_sweep, draw it with 'chaospound plot'.",
+    )
+    add_scene_options(parser)
+    group = parser.add_argument_group("sweep")
+    group.add_argument(
+        "--param",
+        dest="params",
+        action="append",
+        default=[],
+        metavar="NAME=GRID",
+        help="swept parameter, once or twice (the last one is the continuation direction); "
+        "GRID is start:stop:step, start:stop#count or v1,v2,... "
+        "(e.g. period_ratio=0.3:2.0:0.005)",
+    )
+    group.add_argument(
+        "--continuation",
+        choices=SWEEP_CONTINUATIONS,
+        default="none",
+        help="none: every point from the scene's initial state; forward/backward: each point "
+        "from the previous point's last section (up/down the last axis); both: the two "
+        "branches side by side (hysteresis)",
+    )
+    group.add_argument(
+        "--lyapunov",
+        nargs="?",
+        const=1,
+        default=0,
+        type=_exponent_count,
+        metavar="K",
+        help="also the K largest Lyapunov exponents per point (K omitted: 1, 'all': the "
+        "full spectrum); put it after the scene file",
+    )
+    group.add_argument(
+        "--lyapunov-cycles",
+        type=_count,
+        default=100,
+        metavar="N",
+        help="excitation cycles averaged for the exponents (100)",
+    )
+    group.add_argument(
+        "--classify",
+        choices=SWEEP_CLASSIFY,
+        default="window",
+        help="window: the regime from each point's own record window (fast); full: the "
+        "adaptive classifier per point (converged transient, slower)",
+    )
+    group.add_argument(
+        "--window-tol",
+        type=float,
+        default=1e-2,
+        metavar="TOL",
+        help="relative stroboscopic mismatch accepted as periodic by --classify window (0.01)",
+    )
+    out = parser.add_argument_group("output and execution")
+    out.add_argument("-o", "--output", required=True, metavar="FILE.h5", help="the sweep file")
+    out.add_argument("--resume", action="store_true",
+                     help="finish an interrupted file of the same sweep (a missing file "
+                     "is started)")
+    out.add_argument("--overwrite", action="store_true", help="replace an existing file")
+    out.add_argument("--workers", type=_count, default=1, metavar="N",
+                     help="worker processes (1); results do not depend on it")
+    out.add_argument("--chunk", type=_count, default=None, metavar="N",
+                     help="points per task (default: sized from the grid and the workers)")
+    out.add_argument("--quiet", action="store_true", help="no progress bar")
+    out.add_argument("--scheduler", metavar="ADDRESS",
+                     help="run the tasks on Dask: tcp://HOST:PORT of a running scheduler, or "
+                     "'local' to start a cluster of --workers processes on this machine "
+                     "(needs chaospound[dask]; docs/distributed.md)")
+    parser.set_defaults(func=_cmd_sweep)
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from chaospound.sweep import SweepInterrupted, SweepSpec, axes_from_scene, parse_axes, run_sweep
+
+    if args.resume and args.overwrite:
+        raise CliError("give --resume or --overwrite, not both")
+    if args.workers < 1:
+        raise CliError(f"--workers {args.workers}: must be an integer >= 1")
+    if args.chunk is not None and args.chunk < 1:
+        raise CliError(f"--chunk {args.chunk}: must be an integer >= 1")
+    scene = scene_from_args(args)
+    if args.params:
+        axes = parse_axes(args.params, scene)
+    elif scene.sweep:
+        axes = axes_from_scene(scene)
+    else:
+        raise CliError(
+            f"nothing to sweep: give --param NAME=GRID (scene {scene.name!r} has no "
+            "[sweep] table)"
+        )
+    spec = SweepSpec(
+        tuple(axes),
+        continuation=args.continuation,
+        lyapunov=args.lyapunov,
+        lyapunov_cycles=args.lyapunov_cycles,
+        classify=args.classify,
+        window_tol=args.window_tol,
+    )
+    _check_sweep_output(args.output, resume=args.resume, overwrite=args.overwrite)
+    from chaospound.distributed import ClusterUnavailable, connect, disconnect
+
+    client = cluster = None
+    if args.scheduler is not None:  # a malformed address is a ValueError: exit 2
+        try:
+            client, cluster = connect(args.scheduler, args.workers)
+        except ClusterUnavailable as exc:
+            return _fail(str(exc), EXIT_FAILURE)
+    try:
+        summary = run_sweep(
+            scene,
+            spec,
+            args.output,
+            workers=args.workers,
+            resume=args.resume,
+            overwrite=args.overwrite,
+            progress=not args.quiet,
+            chunk=args.chunk,
+            client=client,
+        )
+    except SweepInterrupted as exc:
+        return _fail(str(exc), EXIT_INTERRUPTED)
+    except ClusterUnavailable as exc:
+        return _fail(f"{exc}; the points written so far are kept: finish with "
+                     f"chaospound sweep ... -o {args.output} --resume", EXIT_FAILURE)
+    except OSError as exc:
+        raise CliError(f"cannot write {args.output!r}: {exc.strerror or exc}") from None
+    finally:
+        if client is not None:
+            disconnect(client, cluster)
+    _emit(summary.format())
+    return EXIT_OK
+
+
+def _exponent_count(text: str) -> int:
+    """argparse type of --lyapunov: an integer >= 1, or 'all' (-1: the full spectrum)."""
+    if text.strip().lower() == "all":
+        return -1
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be an integer >= 1 or 'all'")
+    return value
+
+
+def _check_sweep_output(path: str, *, resume: bool, overwrite: bool) -> None:
+    """Refuse a sweep file before any work: a directory, a missing folder, an existing
+    file without --resume or --overwrite (run_sweep checks a file to resume, read-only)."""
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(path):
+        raise CliError(f"output {path!r} is a directory")
+    if not os.path.isdir(folder):
+        raise CliError(f"output {path!r}: folder {folder!r} does not exist")
+    if not os.path.exists(path):
+        return
+    if not (resume or overwrite):
+        raise CliError(f"output {path!r} exists (use --resume to finish it or --overwrite "
+                       "to replace it)")
+
+
+# ================================================================= plot
+def _add_plot(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "plot",
+        help="bifurcation diagram or regime map of a sweep file",
+        description="Draw a sweep file: for one swept parameter the bifurcation diagram "
+        "(impact velocity against the parameter, coloured by regime; a second panel with "
+        "the largest Lyapunov exponent when the sweep has exponents), for two a regime map; "
+        "continuation branches side by side. A file still being written shows its "
+        "finished points.",
+    )
+    parser.add_argument("sweep_file", metavar="SWEEP.h5", help="a file of 'chaospound sweep'")
+    parser.add_argument("-o", "--output", metavar="FILE.png",
+                        help="the figure (default: the sweep file with .png; format from "
+                        "the extension)")
+    parser.add_argument("--branch", metavar="NAME",
+                        help="only this branch (fresh, forward or backward; default: all)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing figure")
+    parser.set_defaults(func=_cmd_plot)
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from chaospound.plot import save
+    from chaospound.store import open_sweep
+
+    sweep = open_sweep(args.sweep_file)
+    if args.branch is not None and args.branch not in sweep.branches:
+        raise CliError(f"--branch {args.branch}: the file has {', '.join(sweep.branches)}")
+    output = args.output or os.path.splitext(args.sweep_file)[0] + ".png"
+    if os.path.abspath(output) == os.path.abspath(args.sweep_file):
+        raise CliError(f"output {output!r} is the sweep file itself")
+    check_output_path(output, overwrite=args.overwrite)
+    branches = [args.branch] if args.branch is not None else list(sweep.branches)
+    fig = _sweep_figure(sweep, branches)
+    check_output_path(output, overwrite=args.overwrite)
+    try:
+        save(fig, output)
+    except OSError as exc:
+        raise CliError(f"cannot write {output!r}: {exc.strerror or exc}") from None
+    kind = "bifurcation diagram" if len(sweep.parameters) == 1 else "regime map"
+    _emit(f"wrote {output}: {kind} of {' x '.join(sweep.parameters)}, "
+          f"branch {', '.join(branches)}")
+    return EXIT_OK
+
+
+#: map colour of each stored regime code (chaospound.store.REGIMES); the regimes
+#: shared with the bifurcation diagram take chaospound.plot.REGIME_COLORS
+_MAP_EXTRA_COLORS = {"pending": "white", "unresolved": "C4", "failed": "black"}
+
+
+def _sweep_figure(sweep, branches: Sequence[str]):
+    """The figure of ``chaospound plot``: one column per branch.
+
+    One parameter: :func:`chaospound.plot.plot_bifurcation` per branch (two rows with
+    Lyapunov exponents); two parameters: a regime map per branch.
+    """
+    from matplotlib.figure import Figure
+
+    from chaospound.plot import PERIOD_RATIO_LABEL, plot_bifurcation
+
+    cols = len(branches)
+    name = _scene_name(sweep)
+    done = {b: sum(s != "pending" for s in sweep.status(b)) for b in branches}
+    total = int(math.prod(sweep.shape))
+    if len(sweep.parameters) == 2:
+        fig = Figure(figsize=(6.0 * cols + 1.5, 5.0), layout="constrained")
+        axes = fig.subplots(1, cols, squeeze=False, sharex=True, sharey=True)[0]
+        for ax, branch in zip(axes, branches, strict=True):
+            _regime_map(ax, sweep, branch)
+            ax.set_title(f"{branch}: {done[branch]} of {total} points")
+        fig.suptitle(f"{name}: regimes over {' x '.join(sweep.parameters)} ({sweep.meta['model']} "
+                     "model)")
+        return fig
+    parameter = sweep.parameters[0]
+    values = sweep.grid[parameter]
+    label = PERIOD_RATIO_LABEL if parameter == "period_ratio" else parameter
+    with_exponents = int(sweep.sweep.get("lyapunov", 0)) != 0
+    rows = 2 if with_exponents else 1
+    fig = Figure(figsize=(8.0 * cols, 7.0 if with_exponents else 5.0), layout="constrained")
+    grid = fig.subplots(rows, cols, squeeze=False, sharex=True, sharey="row",
+                        height_ratios=(3, 1) if with_exponents else None)
+    for j, branch in enumerate(branches):
+        plot_bifurcation(
+            values,
+            sweep.impact_velocities(branch),
+            regimes=sweep.regimes(branch),
+            exponents=sweep.array("max_exponent", branch) if with_exponents else None,
+            ax=list(grid[:, j]),
+            parameter_label=label,
+        )
+        grid[0, j].set_title(f"{branch}: {done[branch]} of {total} points")
+    fig.suptitle(f"{name}: impact velocity against {parameter} ({sweep.meta['model']} model)")
+    return fig
+
+
+def _regime_map(ax, sweep, branch: str) -> None:
+    """Regime codes over two parameters (first on x, second on y), with a legend."""
+    import numpy as np
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    from chaospound.plot import REGIME_COLORS
+    from chaospound.store import REGIMES
+
+    colors = [REGIME_COLORS.get(r) or _MAP_EXTRA_COLORS.get(r, "0.3") for r in REGIMES]
+    codes = np.asarray(sweep.array("regime", branch)).reshape(sweep.shape)
+    first, second = sweep.parameters
+    ax.pcolormesh(_cell_edges(sweep.grid[first]), _cell_edges(sweep.grid[second]), codes.T,
+                  cmap=ListedColormap(colors), vmin=-0.5, vmax=len(REGIMES) - 0.5,
+                  edgecolors="face")
+    present = [(code, int(np.count_nonzero(codes == code))) for code in range(len(REGIMES))]
+    handles = [Patch(facecolor=colors[code], edgecolor="0.5", label=f"{REGIMES[code]} ({n})")
+               for code, n in present if n]
+    ax.legend(handles=handles, fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              frameon=False)
+    ax.set_xlabel(first)
+    ax.set_ylabel(second)
+
+
+def _cell_edges(values) -> object:
+    """Cell edges around sorted or unsorted grid values (midpoints; one value: +-5 %)."""
+    import numpy as np
+
+    v = np.asarray(values, dtype=float)
+    if v.size == 1:
+        half = 0.05 * abs(v[0]) or 0.5
+        return np.array([v[0] - half, v[0] + half])
+    mid = 0.5 * (v[1:] + v[:-1])
+    return np.concatenate(([v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]))
+
+
+def _scene_name(sweep) -> str:
+    """The scene's name, from the resolved scene stored in the file."""
+    try:
+        return str(json.loads(sweep.meta["scene_resolved"])["name"])
+    except (KeyError, TypeError, ValueError):
+        return os.path.basename(str(sweep.path))
 
 
 # ============================================================== helpers

@@ -27,10 +27,12 @@ Schema (format "chaospound-sweep", version 1)::
 Per-point arrays are indexed by the grid index (row-major over the axes).
 Crash safety: every batch is written, flushed, and only then are the points'
 statuses set to done and flushed; the flat arrays' committed lengths are
-branch attributes. A killed run therefore leaves a file that opens and in
-which every point marked done is complete; :func:`SweepWriter` on resume
-truncates any uncommitted tail, so the resumed file equals an uninterrupted
-run's (timing fields aside).
+branch attributes (impacts_committed, strobe_committed). A killed run
+therefore leaves a file that opens and in which every point marked done is
+complete; :func:`SweepWriter` on resume truncates the flat arrays to the rows
+of the points marked done or failed, so the resumed file equals an
+uninterrupted run's (timing fields aside). A file that a running sweep holds
+open can be read (:func:`open_sweep`) but not resumed.
 """
 
 from __future__ import annotations
@@ -63,6 +65,8 @@ IMPACT_FIELDS = ("time", "phase", "velocity", "corner", "peak_penetration", "pea
                  "duration")
 TIMING_FIELDS = ("wall_s", "created")
 MESSAGE_LENGTH = 240
+LIVE_READ_ATTEMPTS = 20  #: reads of a file that a running sweep is writing ...
+LIVE_READ_PAUSE = 0.05  #: ... this many seconds apart
 CHUNK = 4096
 
 
@@ -127,8 +131,9 @@ class SweepWriter:
             raise SweepStoreError(f"{self.path}: file exists (use --resume to finish it or "
                                   "--overwrite to replace it)")
         if resume and self.path.exists():
+            with _open_readonly(self.path) as f:  # never open a foreign file for writing
+                _check_same_sweep(f, self.path, meta, grid, branches)
             self.file = _open_for_append(self.path)
-            _check_same_sweep(self.file, self.path, meta, grid, branches)
             for name in branches:
                 _truncate_uncommitted(self.file[name])
             self.file.flush()
@@ -176,10 +181,12 @@ class SweepWriter:
         idx = np.array([r.index for r in results])
         order = np.argsort(idx)
         idx_sorted = idx[order]
+        contiguous = int(idx_sorted[-1]) - int(idx_sorted[0]) + 1 == len(idx_sorted)
+        where = slice(int(idx_sorted[0]), int(idx_sorted[-1]) + 1) if contiguous else idx_sorted
 
         def put(name, values, dtype=None):
             arr = np.asarray(values, dtype=dtype)[order]
-            group[name][idx_sorted] = arr
+            group[name][where] = arr
 
         counts = np.array([len(r.impacts["time"]) for r in results], dtype=np.int64)
         starts = imp_rows + np.concatenate(([0], np.cumsum(counts)[:-1]))
@@ -234,19 +241,39 @@ class SweepFile:
 
     def __init__(self, path) -> None:
         self.path = Path(path)
-        with _open_readonly(self.path) as f:
-            self.meta = {k: _attr(v) for k, v in f.attrs.items()}
-            self.sweep = json.loads(self.meta["sweep"])
-            self.parameters = list(self.sweep["parameters"])
-            self.grid = {name: f["grid"][name][:] for name in self.parameters}
-            self.branches = list(self.sweep["branches"])
-            self._data = {}
-            for b in self.branches:
-                g = f[b]
-                arrays = {name: g[name][:] for name in g if isinstance(g[name], h5py.Dataset)}
-                arrays["impacts"] = {name: g["impacts"][name][:] for name in IMPACT_FIELDS}
-                arrays["strobe"] = g["strobe"]["state"][:]
-                self._data[b] = arrays
+        for attempt in range(LIVE_READ_ATTEMPTS):
+            f, live = _open_for_reading(self.path)
+            try:
+                with f:
+                    self._read(f)
+                return
+            except (OSError, KeyError, ValueError) as exc:
+                if isinstance(exc, SweepStoreError):
+                    raise
+                # a running sweep may be writing what we read: read again, a moment later
+                if not live or attempt == LIVE_READ_ATTEMPTS - 1:
+                    what = "while a sweep writes it " if live else ""
+                    raise SweepStoreError(f"{self.path}: cannot read the sweep store {what}"
+                                          f"({_short(exc)})") from None
+                time.sleep(LIVE_READ_PAUSE)
+
+    def _read(self, f: h5py.File) -> None:
+        self.meta = {k: _attr(v) for k, v in f.attrs.items()}
+        self.sweep = json.loads(self.meta["sweep"])
+        self.parameters = list(self.sweep["parameters"])
+        self.grid = {name: f["grid"][name][:] for name in self.parameters}
+        self.branches = list(self.sweep["branches"])
+        self._data = {}
+        for b in self.branches:
+            g = f[b]
+            # statuses first: in a file still being written, the data of every point
+            # seen as done was flushed before its status
+            arrays = {"status": g["status"][:]}
+            arrays.update({name: g[name][:] for name in g
+                           if name != "status" and isinstance(g[name], h5py.Dataset)})
+            arrays["impacts"] = {name: g["impacts"][name][:] for name in IMPACT_FIELDS}
+            arrays["strobe"] = g["strobe"]["state"][:]
+            self._data[b] = arrays
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -273,7 +300,7 @@ class SweepFile:
         return [names[int(s)] for s in self.array("status", branch)]
 
     def messages(self, branch: str | None = None) -> list[str]:
-        return [m.decode("utf-8") for m in self.array("message", branch)]
+        return [m.decode("utf-8", errors="replace") for m in self.array("message", branch)]
 
     def impacts(self, index: int, branch: str | None = None) -> dict[str, np.ndarray]:
         """The impacts of one grid point: time, phase, velocity, corner (labels), ..."""
@@ -304,7 +331,11 @@ class SweepFile:
 
 
 def open_sweep(path) -> SweepFile:
-    """Open a sweep store for reading (also a partially written one)."""
+    """Open a sweep store for reading (also a partially written one).
+
+    A file that a running sweep holds open is read without HDF5's file lock:
+    the points it shows as done are complete, later ones read as pending.
+    """
     return SweepFile(path)
 
 
@@ -316,24 +347,39 @@ def _attr(value):
 
 
 def _open_readonly(path: Path) -> h5py.File:
+    return _open_for_reading(path)[0]
+
+
+def _open_for_reading(path: Path) -> tuple[h5py.File, bool]:
+    """The store opened read-only, and whether a running sweep holds it (live)."""
     if not path.exists():
         raise SweepStoreError(f"{path}: no such file")
+    live = False
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
-        raise SweepStoreError(f"{path}: not a readable HDF5 file ({_short(exc)})") from None
+        if "lock" not in str(exc):
+            raise SweepStoreError(f"{path}: not a readable HDF5 file ({_short(exc)})") from None
+        try:  # a running sweep holds the write lock: read its committed points anyway
+            f = h5py.File(path, "r", locking=False)
+            live = True
+        except OSError as again:
+            raise SweepStoreError(f"{path}: not a readable HDF5 file ({_short(again)})") from None
     if _attr(f.attrs.get("format", "")) != FORMAT:
         f.close()
         raise SweepStoreError(f"{path}: not a chaospound sweep store (no format={FORMAT!r})")
     if int(f.attrs.get("format_version", 0)) > FORMAT_VERSION:
         f.close()
         raise SweepStoreError(f"{path}: store format version is newer than this chaospound")
-    return f
+    return f, live
 
 
 def _open_for_append(path: Path) -> h5py.File:
-    _open_readonly(path).close()
-    return h5py.File(path, "r+")
+    try:
+        return h5py.File(path, "r+")
+    except OSError as exc:
+        hint = "; is a sweep still writing it?" if "lock" in str(exc) else ""
+        raise SweepStoreError(f"{path}: cannot open for writing ({_short(exc)}){hint}") from None
 
 
 def _short(exc: Exception) -> str:
@@ -394,20 +440,28 @@ def _check_same_sweep(f, path, meta, grid, branches) -> None:
     stored = json.loads(_attr(f.attrs["sweep"]))
     wanted = json.loads(meta["sweep"])
     if stored != wanted or _attr(f.attrs["scene"]) != meta["scene"]:
-        f.close()
         raise SweepStoreError(
             f"{path}: holds a different sweep or scene; resume needs the same definition "
             "(use --overwrite to start again)")
 
 
 def _truncate_uncommitted(group) -> None:
-    """Drop flat rows written after the last commit (a run killed mid-batch)."""
-    rows = int(group.attrs["impacts_committed"])
-    for field in IMPACT_FIELDS:
-        ds = group["impacts"][field]
-        if ds.shape[0] != rows:
-            ds.resize((rows,))
-    rows = int(group.attrs["strobe_committed"])
-    ds = group["strobe"]["state"]
-    if ds.shape[0] != rows:
-        ds.resize((rows, ds.shape[1]))
+    """Drop flat rows written after the last commit (a run killed mid-batch).
+
+    The committed lengths are recomputed from the points marked done or
+    failed (their rows are a prefix of the flat arrays, which are appended in
+    the branch's order), not taken from the length attributes: a run killed
+    between setting the statuses and the attributes leaves them stale.
+    """
+    status = group["status"][:]
+    committed = status != STATUS_PENDING
+    for name, fields, key in (("impact", IMPACT_FIELDS, "impacts_committed"),
+                              ("strobe", ("state",), "strobe_committed")):
+        ends = group[f"{name}_start"][:] + group[f"{name}_count"][:]
+        rows = int(ends[committed].max()) if committed.any() else 0
+        folder = group["impacts" if name == "impact" else "strobe"]
+        for field in fields:
+            ds = folder[field]
+            if ds.shape[0] != rows:
+                ds.resize((rows,) + ds.shape[1:])
+        group.attrs[key] = rows

@@ -20,16 +20,26 @@ Determinism
     visiting order (out-of-order arrivals wait in a small buffer), so files
     from 1 or N workers, or from an interrupted and resumed run, are
     identical apart from the timing fields.
+
+Interruption
+    Finished points are committed to the file in batches (every
+    ``COMMIT_INTERVAL`` seconds or ``COMMIT_POINTS`` points). A kill loses
+    the points since the last commit; Ctrl-C commits the finished ones and
+    raises :class:`SweepInterrupted`; ``resume=True`` computes the rest.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import multiprocessing as mp
 import re
+import signal
+import threading
 import time
-from collections.abc import Iterable, Sequence
+from collections import deque
+from collections.abc import Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 
@@ -52,6 +62,13 @@ CONTINUATIONS = ("none", "forward", "backward", "both")
 CLASSIFY_MODES = ("window", "full")
 WINDOW_TOL = 1e-2  #: default stroboscopic tolerance of the window classification
 MAX_POINTS = 10_000_000
+#: finished points are committed to the file at most this often (seconds) ...
+COMMIT_INTERVAL = 1.0
+#: ... or when this many wait: few HDF5 flushes (cheap, and a reader of the running
+#: sweep's file rarely meets a write in progress), bounded memory, and a kill loses
+#: at most about a second of work
+COMMIT_POINTS = 256
+POLL_S = 0.2  #: the longest wait for worker processes before looking at Ctrl-C
 
 
 class SweepInterrupted(Exception):
@@ -160,6 +177,13 @@ class SweepSpec:
         coords = np.unravel_index(index, self.shape)
         return {a.name: float(a.values[c]) for a, c in zip(self.axes, coords, strict=True)}
 
+    def order(self, branch: str) -> np.ndarray:
+        """Grid indices in the branch's visiting order: its chains, concatenated."""
+        index = np.arange(self.n_points, dtype=np.int64)
+        if branch == "backward":
+            index = index.reshape(-1, self.shape[-1])[:, ::-1].ravel()
+        return index
+
     def chains(self, branch: str) -> list[list[int]]:
         """Chains of grid indices in visiting order; points of a chain run in sequence."""
         n = self.n_points
@@ -190,7 +214,8 @@ class SweepSummary:
         return self.computed / self.wall_s if self.wall_s > 0 else float("nan")
 
     def format(self) -> str:
-        counts = ", ".join(f"{k} {v}" for k, v in sorted(self.regimes.items()) if v)
+        counts = ", ".join(f"{k} {v}" for k, v in sorted(self.regimes.items())
+                           if v and k != "failed")
         lines = [
             f"{self.path}: {self.computed} points computed ({self.points} in the grid) "
             f"in {self.wall_s:.2f} s with {self.workers} worker(s), "
@@ -335,9 +360,7 @@ def run_sweep(
         "state_names": json.dumps(list(STATE_NAMES[model_id])),
     }
     grid = {a.name: a.values for a in spec.axes}
-    chains = {b: spec.chains(b) for b in spec.branches}
-    orders = {b: np.concatenate([np.asarray(c, dtype=np.int64) for c in chains[b]])
-              for b in spec.branches}
+    orders = {b: spec.order(b) for b in spec.branches}
     if chunk is None:
         per_worker = max(1, spec.n_points // (max(workers, 1) * 8))
         chunk = int(min(32, per_worker))
@@ -352,7 +375,7 @@ def run_sweep(
         backend.close()
         raise
     try:
-        plan = _Plan(spec, chains, writer, chunk)
+        plan = _Plan(spec, orders, writer, chunk)
         summary = _execute(plan, backend, writer, progress, str(path))
     finally:
         writer.close()
@@ -369,45 +392,56 @@ def run_sweep(
 class _Task:
     branch: str
     key: tuple[int, int]  # (chain, segment): the branch's flush order
-    indices: list[int]
+    indices: np.ndarray  # grid indices, in visiting order
     start_state: np.ndarray | None
     continuation: bool
     last_of_chain: bool
 
 
 class _Plan:
-    """Which points remain, cut into tasks, and the order results are written in."""
+    """Which points remain, cut into tasks, and the order results are written in.
 
-    def __init__(self, spec: SweepSpec, chains: dict, writer: SweepWriter, chunk: int) -> None:
+    Bookkeeping is a few bytes per point (index arrays): the tasks of the
+    "fresh" branch are cut lazily, continuation chains are rows of the
+    branch's visiting order.
+    """
+
+    def __init__(self, spec: SweepSpec, orders: dict[str, np.ndarray], writer: SweepWriter,
+                 chunk: int) -> None:
         self.spec = spec
         self.chunk = chunk
-        self.ready: list[_Task] = []
-        self.flush_order: dict[str, list[tuple[int, int]]] = {}
-        self.remaining: dict[tuple[str, int], list[int]] = {}
+        self.flush_order: dict[str, Sequence[tuple[int, int]]] = {}
+        self.remaining: dict[tuple[str, int], np.ndarray] = {}
         self.total = 0
-        for branch, branch_chains in chains.items():
+        self._chain_starts: list[_Task] = []
+        self._fresh_todo = np.zeros(0, dtype=np.int64)
+        for branch, order in orders.items():
             pending = writer.pending(branch)
-            keys = []
             if branch == "fresh":
-                todo = [c[0] for c in branch_chains if pending[c[0]]]
-                for s in range(0, len(todo), chunk):
-                    key = (s // chunk, 0)
-                    keys.append(key)
-                    self.ready.append(_Task(branch, key, todo[s:s + chunk], None, False, True))
-                self.total += len(todo)
-            else:
-                for c, chain in enumerate(branch_chains):
-                    todo = [i for i in chain if pending[i]]
-                    if not todo:
-                        continue
-                    first = chain.index(todo[0])
-                    state = writer.final_state(branch, chain[first - 1]) if first > 0 else None
-                    n_seg = math.ceil(len(todo) / chunk)
-                    keys += [(c, s) for s in range(n_seg)]
-                    self.remaining[(branch, c)] = todo
-                    self.total += len(todo)
-                    self.ready.append(self._segment(branch, c, 0, state))
+                self._fresh_todo = order[pending[order]]
+                self.flush_order[branch] = _FreshKeys(math.ceil(self._fresh_todo.size / chunk))
+                self.total += int(self._fresh_todo.size)
+                continue
+            keys: list[tuple[int, int]] = []
+            for c, chain in enumerate(order.reshape(-1, spec.shape[-1])):
+                waiting = pending[chain]
+                if not waiting.any():
+                    continue
+                first = int(np.flatnonzero(waiting)[0])
+                todo = chain[first:]
+                state = writer.final_state(branch, int(chain[first - 1])) if first > 0 else None
+                keys += [(c, seg) for seg in range(math.ceil(todo.size / chunk))]
+                self.remaining[(branch, c)] = todo
+                self.total += int(todo.size)
+                self._chain_starts.append(self._segment(branch, c, 0, state))
             self.flush_order[branch] = keys
+
+    def tasks(self) -> Iterator[_Task]:
+        """The first task of every chain, then the fresh points' tasks, cut as needed."""
+        yield from self._chain_starts
+        todo, chunk = self._fresh_todo, self.chunk
+        for k in range(len(self.flush_order.get("fresh", ()))):
+            yield _Task("fresh", (k, 0), todo[k * chunk:(k + 1) * chunk], None, False, True)
 
     def _segment(self, branch, chain, seg, state) -> _Task:
         todo = self.remaining[(branch, chain)]
@@ -424,6 +458,21 @@ class _Plan:
         return self._segment(task.branch, task.key[0], task.key[1] + 1, state)
 
 
+class _FreshKeys(Sequence):
+    """Flush order of the fresh branch's tasks, (0, 0), (1, 0), ..., without a list."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, k):
+        if not 0 <= k < self.n:
+            raise IndexError(k)
+        return (k, 0)
+
+
 def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: str):
     from .store import REGIMES
 
@@ -431,24 +480,50 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
     messages: list[str] = []
     failed = 0
     done = 0
-    buffers: dict[str, dict] = {b: {} for b in plan.flush_order}
+    buffers: dict[str, dict] = {b: {} for b in plan.flush_order}  # arrived out of order
     cursor = dict.fromkeys(plan.flush_order, 0)
+    staged: dict[str, list[PointResult]] = {b: [] for b in plan.flush_order}  # in order
+    committed = 0
+    last_commit = time.monotonic()
+    writing = False
+
+    def commit() -> None:
+        nonlocal committed, last_commit, writing
+        writing = True
+        for branch in staged:
+            batch, staged[branch] = staged[branch], []
+            writer.write(branch, batch)
+            committed += len(batch)
+        writing = False
+        last_commit = time.monotonic()
+
     bar = _progress_bar(plan.total, progress)
-    queue = list(plan.ready)
+    follow_ups: deque[_Task] = deque()  # next segments of running chains go first
+    new_tasks = plan.tasks()
     in_flight = {}
-    limit = 2 * backend.workers + 2
+    # with worker processes the main thread only waits (in short slices): a Ctrl-C just
+    # sets a flag, so it never lands inside the pool's finalizers; else it raises at once
+    ctrl_c = _CtrlC(raise_at_once=not getattr(backend, "polls", False))
     try:
-        while queue or in_flight:
-            while queue and len(in_flight) < limit:
-                task = queue.pop(0)
+        ctrl_c.install()
+        while True:
+            ctrl_c.check()
+            limit = 2 * backend.workers + 2  # a cluster may grow or shrink
+            while len(in_flight) < limit:
+                task = follow_ups.popleft() if follow_ups else next(new_tasks, None)
+                if task is None:
+                    break
                 in_flight[backend.submit(task)] = task
+            if not in_flight:
+                break
             finished = backend.wait_some(list(in_flight))
             for fut in finished:
                 task = in_flight.pop(fut)
                 results = backend.result(fut)
                 nxt = plan.follow_up(task, results)
                 if nxt is not None:
-                    queue.insert(0, nxt)
+                    follow_ups.appendleft(nxt)
+                ctrl_c.check()
                 buffers[task.branch][task.key] = results
                 for r in results:
                     regimes[r.regime] = regimes.get(r.regime, 0) + 1
@@ -462,21 +537,62 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
                     bar.set_postfix_str(_postfix(regimes, failed), refresh=False)
             for branch in buffers:
                 order = plan.flush_order[branch]
-                batch = []
                 while cursor[branch] < len(order) and order[cursor[branch]] in buffers[branch]:
-                    batch += buffers[branch].pop(order[cursor[branch]])
+                    staged[branch] += buffers[branch].pop(order[cursor[branch]])
                     cursor[branch] += 1
-                writer.write(branch, batch)
+            if (time.monotonic() - last_commit >= COMMIT_INTERVAL
+                    or sum(map(len, staged.values())) >= COMMIT_POINTS):
+                commit()
+        commit()
     except KeyboardInterrupt:
         backend.abort()
+        if not writing:  # keep the finished points; inside a write, resume repairs the file
+            with contextlib.suppress(KeyboardInterrupt):
+                commit()
         if bar is not None:
             bar.close()
-        raise SweepInterrupted(done, plan.total, path) from None
+        raise SweepInterrupted(committed, plan.total, path) from None
+    finally:
+        ctrl_c.uninstall()
     if bar is not None:
         bar.close()
     return SweepSummary(path=path, points=plan.spec.n_points * len(plan.spec.branches),
                         computed=done, regimes=regimes, failed=failed, wall_s=0.0, workers=0,
                         messages=messages)
+
+
+class _CtrlC:
+    """SIGINT handler that remembers a Ctrl-C, and raises KeyboardInterrupt at once or not.
+
+    Python drops an exception raised while a finalizer or weakref callback runs
+    (printing "Exception ignored in ..."), so a Ctrl-C landing there would be lost;
+    the sweep loop calls :meth:`check` to raise it (again).
+    """
+
+    def __init__(self, raise_at_once: bool = True) -> None:
+        self.pressed = False
+        self.raise_at_once = raise_at_once
+        self._previous = None
+
+    def install(self) -> None:
+        if threading.current_thread() is not threading.main_thread():
+            return
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+
+    def uninstall(self) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+
+    def check(self) -> None:
+        if self.pressed:
+            raise KeyboardInterrupt
+
+    def _handle(self, signum, frame) -> None:
+        self.pressed = True
+        if self.raise_at_once:
+            raise KeyboardInterrupt
 
 
 def _postfix(regimes: dict, failed: int) -> str:
@@ -519,10 +635,15 @@ class _LocalBackend:
         return self._pool.submit(_run_in_worker, task.indices, task.start_state,
                                  task.continuation)
 
+    @property
+    def polls(self) -> bool:
+        """True with worker processes: :meth:`wait_some` returns at least every POLL_S."""
+        return self._pool is not None
+
     def wait_some(self, futures):
         if self._pool is None:
             return futures
-        done, _ = wait(futures, return_when=FIRST_COMPLETED)
+        done, _ = wait(futures, timeout=POLL_S, return_when=FIRST_COMPLETED)
         return list(done)
 
     def result(self, fut):
@@ -563,6 +684,9 @@ _WORKER: dict = {}
 
 
 def _init_worker(scene: Scene, spec: SweepSpec) -> None:
+    # Ctrl-C at a terminal reaches the whole process group: only the parent handles it
+    # (it terminates the workers), so that workers print no tracebacks
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _WORKER["scene"] = scene
     _WORKER["spec"] = spec
 
