@@ -267,7 +267,7 @@ def test_readable_output_table_matches_json(capsys):
     assert code == 0 and err == ""
     assert "towers (12 states" in out
     assert "5 transient + 2 recorded" in out
-    assert "dopri5" in out and "rtol 1e-06" in out
+    assert "dopri5" in out and "rtol 1e-05" in out
     lines = out.splitlines()
     start = next(i for i, line in enumerate(lines) if line.split()[:2] == ["#", "cycle"])
     rows = [line.split() for line in lines[start + 1 :] if line.strip()][: len(doc["impacts"])]

@@ -288,7 +288,14 @@ def test_paper_solver_alias():
     assert (solver.method, solver.rtol) == ("cash-karp", 1e-3)
     solver = Scene().with_params(method="paper", rtol=1e-5).solver
     assert (solver.method, solver.rtol) == ("cash-karp", 1e-5)
-    assert Solver().rtol == 1e-6 and Solver().atol == 1e-9
+    assert Solver().rtol == 1e-5 and Solver().atol == pytest.approx(1e-8)
+    # atol follows rtol unless given (the work-precision rule atol = 1e-3 rtol)
+    scene = load_preset("fig3a").with_params(rtol=1e-9)
+    assert scene.solver.atol == pytest.approx(1e-12)
+    fixed = load_preset("fig3a").with_params(atol=1e-7).with_params(rtol=1e-9)
+    assert fixed.solver.atol == 1e-7
+    assert Scene.from_toml(scene.to_toml()) == scene
+    assert Scene.from_toml(fixed.to_toml()).solver.atol == 1e-7
 
 
 def test_to_dict_is_json_and_complete():
