@@ -31,7 +31,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5, help="timed runs each (best counts)")
     parser.add_argument("--output", default=str(DEFAULT_OUTPUT), help="JSON file written")
     parser.add_argument("--rtol", type=float, default=1e-6,
-                        help="relative tolerance (default 1e-6, the issue's setting; atol 1e-3 rtol)")
+                        help="rtol (default 1e-6, the issue's setting; atol = 1e-3 rtol)")
     args = parser.parse_args()
 
     scene = load_preset(args.preset).with_params(rtol=args.rtol)
