@@ -361,6 +361,10 @@ def run_sweep(
     }
     grid = {a.name: a.values for a in spec.axes}
     orders = {b: spec.order(b) for b in spec.branches}
+    if chunk is None and client is not None:  # sized from the cluster's threads
+        from .distributed import default_chunk
+
+        chunk = default_chunk(client, spec.n_points)
     if chunk is None:
         per_worker = max(1, spec.n_points // (max(workers, 1) * 8))
         chunk = int(min(32, per_worker))
