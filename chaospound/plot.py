@@ -57,6 +57,8 @@ REGIME_COLORS = {
     "group-periodic": "C2",
     "quasi-periodic": "C1",
     "chaotic": "C3",
+    "unresolved": "C4",
+    "failed": "k",
 }
 VELOCITY_LABEL = r"$V/(A_g\,\omega_{Ax})$"
 PHASE_LABEL = r"phase $(t\ \mathrm{mod}\ T)/T$"
@@ -431,6 +433,8 @@ def plot_bifurcation(
                 xs.append(np.full(v.size, value))
                 vs.append(v)
         x, v = np.concatenate(xs), np.concatenate(vs)
+        if x.size == 0:
+            continue  # e.g. "none": no impact to draw, no legend entry
         top.scatter(
             x,
             v,

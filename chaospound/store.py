@@ -14,6 +14,8 @@ Schema (format "chaospound-sweep", version 1)::
         regime                (N,) int8 code into the attribute REGIMES
         impacts_per_period, period_cycles   (N,) int16, -1 where undefined
         strobe_mismatch, zero_one, max_exponent, max_exponent_error   (N,) float64
+        transient_used        (N,) int32: cycles run before the classified window
+        corner_sequence       (N,) bytes: corners of one period, e.g. b"A+ B- A+"
         exponents             (N, k) float64 (only with Lyapunov exponents)
         final_state           (N, n) float64: state at the last section
         steps, rejected, rhs_evals   (N,) int64
@@ -65,6 +67,7 @@ IMPACT_FIELDS = ("time", "phase", "velocity", "corner", "peak_penetration", "pea
                  "duration")
 TIMING_FIELDS = ("wall_s", "created")
 MESSAGE_LENGTH = 240
+SEQUENCE_LENGTH = 160  #: room for 53 corner labels of one period
 LIVE_READ_ATTEMPTS = 20  #: reads of a file that a running sweep is writing ...
 LIVE_READ_PAUSE = 0.05  #: ... this many seconds apart
 CHUNK = 4096
@@ -88,6 +91,8 @@ class PointResult:
     zero_one: float
     max_exponent: float
     max_exponent_error: float
+    transient_used: int
+    corner_sequence: str
     exponents: np.ndarray | None
     final_state: np.ndarray
     steps: int
@@ -201,6 +206,9 @@ class SweepWriter:
         put("regime", [REGIMES.index(r.regime) for r in results], dtype=np.int8)
         for name in ("impacts_per_period", "period_cycles"):
             put(name, [getattr(r, name) for r in results], dtype=np.int16)
+        put("transient_used", [r.transient_used for r in results], dtype=np.int32)
+        put("corner_sequence", [r.corner_sequence.encode("ascii")[:SEQUENCE_LENGTH]
+                                for r in results], dtype=f"S{SEQUENCE_LENGTH}")
         for name in ("strobe_mismatch", "zero_one", "max_exponent", "max_exponent_error",
                      "wall_s"):
             put(name, [getattr(r, name) for r in results], dtype=np.float64)
@@ -416,6 +424,8 @@ def _create_layout(f, meta, grid, branches, n_state, n_exponents) -> None:
         per_point("regime", np.int8, 0)
         per_point("impacts_per_period", np.int16, -1)
         per_point("period_cycles", np.int16, -1)
+        per_point("transient_used", np.int32, -1)
+        per_point("corner_sequence", f"S{SEQUENCE_LENGTH}", b"")
         for ds_name in ("strobe_mismatch", "zero_one", "max_exponent", "max_exponent_error",
                         "wall_s"):
             per_point(ds_name, np.float64, np.nan)

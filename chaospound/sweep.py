@@ -718,7 +718,7 @@ def run_task(scene: Scene, spec: SweepSpec, indices: Sequence[int],
 def run_point(scene: Scene, spec: SweepSpec, index: int,
               start_state: np.ndarray | None = None) -> PointResult:
     """Steady run, classification and optional exponents of one grid point."""
-    from .dynamics.classify import classify, classify_sequence
+    from .dynamics.classify import classify, classify_sequence, length_weights
     from .dynamics.lyapunov import lyapunov_spectrum
     from .simulate import SimulationError, simulate
 
@@ -730,21 +730,28 @@ def run_point(scene: Scene, spec: SweepSpec, index: int,
         sim = simulate(point, initial_state=start_state,
                        start_at_section=start_state is not None)
         exps = errs = None
+        max_exp = max_err = None
         if n_exp:
             spectrum = lyapunov_spectrum(point, k=n_exp, transient=0,
                                          initial_state=sim.strobe.state[-1],
                                          cycles=spec.lyapunov_cycles, tangent_transient=10)
             exps, errs = spectrum.exponents, spectrum.errors
+            max_exp, max_err = float(exps[0]), float(errs[0])
         imp = sim.impacts
         if spec.classify == "full":
             regime = classify(point)
+            if exps is None and regime.max_exponent is not None:
+                max_exp, max_err = regime.max_exponent, regime.max_exponent_error
+            transient_used = regime.transient_used
         else:
+            weights = length_weights(point, sim.state_names)  # rotations as lengths
             regime = classify_sequence(
-                sim.strobe.state, imp.cycle, imp.phase, imp.velocity, imp.labels,
+                sim.strobe.state * weights, imp.cycle, imp.phase, imp.velocity, imp.labels,
                 max_period=max(1, sim.record // 2), tol=spec.window_tol,
                 exponent=None if exps is None else float(exps[0]),
                 exponent_error=None if errs is None else float(errs[0]),
             )
+            transient_used = sim.transient
         stats = sim.stats
         return PointResult(
             index=index, status=1, message="", regime=regime.regime,
@@ -752,8 +759,9 @@ def run_point(scene: Scene, spec: SweepSpec, index: int,
             period_cycles=_int_or(regime.period_cycles),
             strobe_mismatch=float(regime.strobe_mismatch),
             zero_one=_float_or(regime.zero_one),
-            max_exponent=np.nan if exps is None else float(exps[0]),
-            max_exponent_error=np.nan if errs is None else float(errs[0]),
+            max_exponent=_float_or(max_exp), max_exponent_error=_float_or(max_err),
+            transient_used=int(transient_used),
+            corner_sequence=" ".join(regime.corner_sequence),
             exponents=exps, final_state=sim.strobe.state[-1].copy(),
             steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
             wall_s=time.perf_counter() - started,
@@ -773,7 +781,8 @@ def _failed_point(index: int, n_state: int, message: str, started: float) -> Poi
     return PointResult(
         index=index, status=2, message=message.splitlines()[0] if message else "failed",
         regime="failed", impacts_per_period=-1, period_cycles=-1, strobe_mismatch=np.nan,
-        zero_one=np.nan, max_exponent=np.nan, max_exponent_error=np.nan, exponents=None,
+        zero_one=np.nan, max_exponent=np.nan, max_exponent_error=np.nan, transient_used=-1,
+        corner_sequence="", exponents=None,
         final_state=np.full(n_state, np.nan), steps=0, rejected=0, rhs_evals=0,
         wall_s=time.perf_counter() - started,
         impacts={"time": empty, "phase": empty, "velocity": empty,

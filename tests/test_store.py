@@ -87,6 +87,8 @@ BRANCH_DATASETS = {
     "regime": (np.int8, ("N",)),
     "impacts_per_period": (np.int16, ("N",)),
     "period_cycles": (np.int16, ("N",)),
+    "transient_used": (np.int32, ("N",)),
+    "corner_sequence": ("S", ("N",)),
     "strobe_mismatch": (np.float64, ("N",)),
     "zero_one": (np.float64, ("N",)),
     "max_exponent": (np.float64, ("N",)),

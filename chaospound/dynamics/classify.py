@@ -56,8 +56,12 @@ The rules, in the order :func:`classify` applies them (the same text is in
    quasi-periodic when |lambda| <= 3 sigma and K < 0.2 (an exponent that is
    merely consistent with zero is not enough on its own); unresolved
    otherwise, in particular lambda < -3 sigma without a period (a period
-   longer than max_period or a transient longer than max_transient). With
-   ``test01=False`` the exponent decides alone.
+   longer than max_period or a transient longer than max_transient). When
+   lambda / sigma falls between 1 and 6 (near the 3-sigma line, where a
+   200-cycle run decides by chance) the exponent is recomputed over 4 times as
+   many cycles. Without a 0-1 test (``test01=False``, or the few sections of a
+   sweep's record window) the exponent alone can show chaos but not
+   quasi-periodicity: |lambda| <= 3 sigma is then unresolved.
 7. Without an exponent (:func:`classify_sequence` on bare data) the 0-1 test
    decides: chaotic when K > 0.8, quasi-periodic when K < 0.2, unresolved
    between (and below 100 sections, where no K is computed).
@@ -92,6 +96,7 @@ __all__ = [
     "Regime",
     "classify",
     "classify_sequence",
+    "length_weights",
     "zero_one_test",
 ]
 
@@ -111,6 +116,8 @@ ZERO_ONE_CYCLES = 1000  #: sections recorded for the 0-1 test when no period is 
 ZERO_ONE_MIN_POINTS = 100  #: fewer points: no 0-1 test (K = None)
 ZERO_ONE_C_RANGE = (math.pi / 5, 4 * math.pi / 5)  #: c avoids the resonances at 0 and pi
 MISMATCH_DECADES = 2.0  #: a mismatch this many decades below tol gives full confidence
+AMBIGUOUS_Z = (1.0, 6.0)  #: lambda / sigma in this range: rerun the exponent LONGER_RUN x longer
+LONGER_RUN = 4
 Z_FULL_CONFIDENCE = 10.0  #: lambda / sigma giving full confidence in chaos
 
 
@@ -250,7 +257,7 @@ def classify(
     _check_arguments(min_transient, max_transient, chunk, window, max_period, lyapunov_cycles)
     scene, rtol_used, atol_used = _classification_scene(system)
     tol = TOL_PER_RTOL * rtol_used if tol is None else _check_tol(tol)
-    weights = _length_weights(scene, system.state_names)
+    weights = length_weights(scene, system.state_names)
     start = np.asarray(system.initial_state, dtype=float)
 
     # 1. adaptive transient, 2. record window; a window whose period differs from the
@@ -311,6 +318,12 @@ def classify(
         labels = labels + extra.labels
     spectrum = lyapunov_spectrum(System.from_scene(scene), k=1, transient=0,
                                  cycles=lyapunov_cycles, initial_state=last)
+    z = spectrum.max_exponent / max(spectrum.max_error, 1e-300)
+    if AMBIGUOUS_Z[0] < abs(z) < AMBIGUOUS_Z[1]:
+        # near the 3-sigma line a short run decides by chance: average 4x longer
+        lyapunov_cycles = LONGER_RUN * lyapunov_cycles
+        spectrum = lyapunov_spectrum(System.from_scene(scene), k=1, transient=0,
+                                     cycles=lyapunov_cycles, initial_state=last)
     regime = classify_sequence(
         states * weights, cycles, local_phase, velocity, labels,
         max_period=max_period, tol=tol, exponent=spectrum.max_exponent,
@@ -538,8 +551,12 @@ def _phase_from_section(time, cycle, period, section_phase) -> np.ndarray:
     return np.clip(np.asarray(time) / period - section_phase - np.asarray(cycle), 0.0, None)
 
 
-def _length_weights(scene: Scene, state_names: Sequence[str]) -> np.ndarray:
-    """Per-component factors putting the state in lengths and velocities (rule 2)."""
+def length_weights(scene: Scene, state_names: Sequence[str]) -> np.ndarray:
+    """Per-component factors putting the state in lengths and velocities (rule 2).
+
+    Rotations and their rates are multiplied by the tower's radius of gyration
+    so that every component of a section point is in A_g or A_g omega_Ax.
+    """
     rho = {"A": scene.tower_A.rho, "B": scene.tower_B.rho}
     return np.array([rho[name[-1]] if name.lstrip("d").startswith("th_") else 1.0
                      for name in state_names])
@@ -646,7 +663,7 @@ def _aperiodic_regime(exponent, error, zero_one, evidence) -> tuple[str, float]:
         if z > SIGMAS and (zero_one is None or zero_one >= ZERO_ONE_REGULAR):
             parts = [_clip((z - SIGMAS) / (Z_FULL_CONFIDENCE - SIGMAS)), k_chaos]
             return "chaotic", min(p for p in parts if p is not None)
-        if abs(z) <= SIGMAS and (zero_one is None or zero_one < ZERO_ONE_REGULAR):
+        if abs(z) <= SIGMAS and zero_one is not None and zero_one < ZERO_ONE_REGULAR:
             parts = [_clip(1.0 - abs(z) / SIGMAS), k_regular]
             return "quasi-periodic", min(p for p in parts if p is not None)
         return "unresolved", 0.0
