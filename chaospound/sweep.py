@@ -556,6 +556,15 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
         if bar is not None:
             bar.close()
         raise SweepInterrupted(committed, plan.total, path) from None
+    except Exception:
+        # e.g. the Dask cluster went away: keep every finished point, then report
+        backend.abort()
+        if not writing:
+            with contextlib.suppress(Exception):
+                commit()
+        if bar is not None:
+            bar.close()
+        raise
     finally:
         ctrl_c.uninstall()
     if bar is not None:
