@@ -59,7 +59,13 @@ from pathlib import Path
 import numpy as np
 
 from chaospound.dynamics.lyapunov import lyapunov_spectrum
-from chaospound.scene import DEFAULT_ATOL, DEFAULT_RTOL, PAPER_RTOL, STATE_NAMES, Scene, load_preset
+from chaospound.scene import (
+    DEFAULT_RTOL,
+    PAPER_RTOL,
+    STATE_NAMES,
+    Scene,
+    load_preset,
+)
 from chaospound.simulate import SimulationError, simulate
 from chaospound.store import open_sweep
 from chaospound.sweep import SweepSpec, parse_axis, run_sweep
@@ -480,7 +486,8 @@ def run_study(quick: bool, log) -> dict:
         "results": results,
         "restart": restart,
         "atol": atol_rows,
-        "current_defaults": {"method": "dopri5", "rtol": DEFAULT_RTOL, "atol": DEFAULT_ATOL},
+        "current_defaults": {"method": "dopri5", "rtol": DEFAULT_RTOL,
+                             "atol": ATOL_PER_RTOL * DEFAULT_RTOL},
         "compute_s": None,
     }
     doc["lyapunov_statistics"] = lyapunov_statistics(doc)

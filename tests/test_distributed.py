@@ -31,11 +31,13 @@ import pytest
 
 pytest.importorskip("distributed")
 
+from storecheck import assert_same_store, bitwise, store_contents  # noqa: F401
+
 from chaospound import distributed as cp_distributed  # noqa: E402
 from chaospound.cli import main  # noqa: E402
 from chaospound.distributed import DaskBackend, connect, disconnect  # noqa: E402
 from chaospound.scene import load_preset  # noqa: E402
-from chaospound.store import TIMING_FIELDS, SweepStoreError, open_sweep  # noqa: E402
+from chaospound.store import SweepStoreError, open_sweep  # noqa: E402
 from chaospound.sweep import SweepSpec, parse_axis, run_sweep  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,33 +56,13 @@ def spec_of(scene, *grids: str, **options) -> SweepSpec:
     return SweepSpec(tuple(parse_axis(g, scene) for g in grids), **options)
 
 
-def store_contents(path) -> dict:
-    """Every attribute and dataset of a file, keyed by HDF5 path, timing fields left out."""
-    out = {}
-    with h5py.File(path, "r") as f:
-        def visit(name, obj):
-            for key, value in obj.attrs.items():
-                if key not in TIMING_FIELDS:
-                    out[f"{name}@{key}"] = value
-            if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in TIMING_FIELDS:
-                out[name] = obj[()]
-
-        visit("/", f)
-        f.visititems(visit)
-    return out
 
 
-def bitwise(a, b) -> bool:
-    a, b = np.asarray(a), np.asarray(b)
-    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
-def assert_same_store(path_a, path_b) -> None:
-    """Bitwise the same datasets and attributes, timing fields (wall_s, created) aside."""
-    a, b = store_contents(path_a), store_contents(path_b)
-    assert sorted(a) == sorted(b)
-    different = [key for key in a if not bitwise(a[key], b[key])]
-    assert not different, f"differ: {different}"
+
+
+
 
 
 def assert_each_done_point_once(path) -> int:

@@ -34,12 +34,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from storecheck import assert_same_store, bitwise, store_contents  # noqa: F401
 
 from chaospound import cli
 from chaospound.cli import main
 from chaospound.plot import plot_bifurcation
 from chaospound.scene import Scene, load_preset
-from chaospound.store import REGIMES, TIMING_FIELDS, SweepStoreError, open_sweep
+from chaospound.store import REGIMES, SweepStoreError, open_sweep
 from chaospound.sweep import (
     CONTINUATIONS,
     SweepSpec,
@@ -57,33 +58,13 @@ FIG4 = load_preset("fig4").with_params(transient=20, record=4)
 # ------------------------------------------------------------------ helpers
 
 
-def bitwise(a, b) -> bool:
-    a, b = np.asarray(a), np.asarray(b)
-    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
-def store_contents(path) -> dict:
-    """Every attribute and dataset of a file, keyed by HDF5 path, timing fields left out."""
-    out = {}
-    with h5py.File(path, "r") as f:
-        def visit(name, obj):
-            for key, value in obj.attrs.items():
-                if key not in TIMING_FIELDS:
-                    out[f"{name}@{key}"] = value
-            if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in TIMING_FIELDS:
-                out[name] = obj[()]
-
-        visit("/", f)
-        f.visititems(visit)
-    return out
 
 
-def assert_same_store(path_a, path_b) -> None:
-    """Bitwise the same datasets and attributes, timing fields (wall_s, created) aside."""
-    a, b = store_contents(path_a), store_contents(path_b)
-    assert sorted(a) == sorted(b)
-    different = [key for key in a if not bitwise(a[key], b[key])]
-    assert not different, f"differ: {different}"
+
+
+
 
 
 def spec_of(scene: Scene, *grids: str, **options) -> SweepSpec:
