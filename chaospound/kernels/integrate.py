@@ -95,6 +95,8 @@ STATUS_NONFINITE = 4  #: the state became NaN or infinite
 
 GRAZE_MARGIN = 0.25  #: relative margin of the graze pre-test (see _may_cross)
 GRAZE_FLOOR = 1e-6  #: absolute margin of the graze pre-test (units of A_g)
+LAND_SLACK = 1e-8  #: a landing may miss its crossing by this much time, no more
+FOLLOW_CYCLES = 5  #: cycles an episode running at the window's end is followed
 MERGE_TOL = 1e-10  #: events closer than this in time are handled together
 MAX_EVENTS = 4  #: per step: two ends, each with at most two crossings
 
@@ -181,6 +183,8 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
         h = h_fixed
     elif h <= 0.0:
         h = initial_step(method, model, t0 + tau, y, f0, p, rtol, atol, work, work2)
+        if not (h > 0.0 and np.isfinite(h)):  # the heuristic overflows for atol ~ 1e-155
+            h = 1e-6 * max(1.0, period)
         stats[ST_RHS_EVALS] += 1
 
     contact_ends(model, t0 + tau, y, p, ends_old)
@@ -215,8 +219,8 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
             if k >= k_end:
                 record_done = True
             seg_end = period
-        if record_done and not active:
-            break
+        if record_done and (not active or k > k_end + FOLLOW_CYCLES):
+            break  # an episode that never ends (towers resting on each other) is cut
         if attempts >= max_steps:
             status = STATUS_MAX_STEPS
             break
@@ -346,6 +350,9 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
             else:
                 t_ev = t_here + theta * h_try
                 end_value(model, method, dense, y, t_here, h_try, theta, p, 0, work, ends_tmp)
+            if theta >= 1.0 and _landed_short(ends_new, end, inside_lo if end == 0 else inside_hi,
+                                              h_try, rtol, atol):
+                continue  # the landed state is still clearly before the crossing
             if end == 0:
                 inside_lo = not inside_lo
                 if not two_ends:
@@ -472,6 +479,25 @@ def _orthonormalize(y, n_base, n_vectors, log_out, row):
             log_out[row, i] = np.log(norm)
         for c in range(n_base):
             y[a + c] /= norm
+
+
+@njit(cache=True)
+def _landed_short(ends, end, inside, h, rtol, atol):
+    """Whether a step landed on a located crossing actually stopped before it.
+
+    The root was located on the interpolant; the step's own end state can
+    still be on the old side. Within the interpolant's accuracy
+    (``atol + rtol |d'| h`` in penetration, or ``LAND_SLACK`` in time) the
+    crossing counts; further away, or moving away from 0, it has not happened
+    yet and the next step will find it.
+    """
+    d = ends[end]
+    rate = ends[end + 2]
+    if d == 0.0 or (d > 0.0) != inside:
+        return False
+    towards = rate < 0.0 if inside else rate > 0.0
+    slack = max(abs(rate) * LAND_SLACK, atol + rtol * abs(rate) * h)
+    return not towards or abs(d) > slack
 
 
 @njit(cache=True)
