@@ -357,22 +357,27 @@ def _simulation_document(sim: Simulation) -> dict:
     return document
 
 
+def _scene_title(scene) -> str:
+    return f"{scene.name}: {scene.description}" if scene.description else scene.name
+
+
+def _solver_text(solver) -> str:
+    """Method and accuracy setting, as shown in every report header."""
+    if solver.method == "rk4":
+        return f"rk4, {solver.steps_per_cycle} steps per cycle"
+    return f"{solver.method}, rtol {solver.rtol:g}, atol {solver.atol:g}"
+
+
 def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | None) -> str:
     """Header, impact table and summary of one run, as text."""
     scene, imp = sim.scene, sim.impacts
-    solver = scene.solver
-    accuracy = (
-        f"{solver.steps_per_cycle} steps per cycle"
-        if solver.method == "rk4"
-        else f"rtol {solver.rtol:g}, atol {solver.atol:g}"
-    )
     header = [
-        ("scene", f"{scene.name}: {scene.description}" if scene.description else scene.name),
+        ("scene", _scene_title(scene)),
         ("model", f"{sim.model} ({len(sim.state_names)} states: {' '.join(sim.state_names)})"),
         ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {sim.period:.6g})"),
         ("cycles", f"{sim.transient} transient + {sim.record} recorded, "
                    f"section phase {scene.run.phase:g}"),
-        ("solver", f"{solver.method}, {accuracy}"),
+        ("solver", _solver_text(scene.solver)),
     ]  # fmt: skip
     blocks = [_table(None, header, "ll")]
     if len(imp):
@@ -608,19 +613,13 @@ def _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
 
 def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) -> str:
     """Header, exponent table and summary of one Lyapunov run, as text."""
-    solver = scene.solver
-    accuracy = (
-        f"{solver.steps_per_cycle} steps per cycle"
-        if solver.method == "rk4"
-        else f"rtol {solver.rtol:g}, atol {solver.atol:g}"
-    )
     header = [
-        ("scene", f"{scene.name}: {scene.description}" if scene.description else scene.name),
+        ("scene", _scene_title(scene)),
         ("model", f"{system.model_name} ({system.dim} states: {' '.join(system.state_names)})"),
         ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {spectrum.period:.6g})"),
         ("cycles", f"{spectrum.transient} transient + {spectrum.tangent_transient} tangent "
                    f"transient + {spectrum.cycles} averaged ({document['blocks']} blocks)"),
-        ("solver", f"{solver.method}, {accuracy}"),
+        ("solver", _solver_text(scene.solver)),
     ]  # fmt: skip
     rows = [
         (
@@ -795,7 +794,7 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
         else f"rtol {evidence.get('rtol'):g}, atol {evidence.get('atol'):g}"
     )
     rows = [
-        ("scene", f"{scene.name}: {scene.description}" if scene.description else scene.name),
+        ("scene", _scene_title(scene)),
         ("model", str(evidence.get("model"))),
         ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {scene.period:.6g})"),
         ("regime", regime.label),
