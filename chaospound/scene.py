@@ -53,6 +53,7 @@ from chaospound.kernels.params import (
     T_KTH,
     T_L,
     T_MU,
+    T_MU_RHO2,
     T_OM,
     T_OM2,
     T_OMT2,
@@ -1075,6 +1076,7 @@ def _pack_tower(
     p[base + T_L] = tower.length
     p[base + T_W] = tower.w
     p[base + T_KTH] = om**2 / rho2
+    p[base + T_MU_RHO2] = mu / rho2
 
 
 def _normalise_initial(state: object) -> tuple[float, ...] | None:

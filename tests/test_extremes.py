@@ -560,9 +560,9 @@ LONG_RUN = {"phase": 0.37, "rtol": 1e-8, "atol": 1e-10}
 
 @functools.cache
 def wall_orbit() -> tuple:
-    """(scene, reference run): 300 cycles settle on the 1-1 orbit; 2 recorded."""
+    """(scene, reference run): 400 cycles settle on the 1-1 orbit; 2 recorded."""
     scene = load_preset("wall").with_params(**LONG_RUN)
-    return scene, simulate(scene, transient=300, record=2)
+    return scene, simulate(scene, transient=400, record=2)
 
 
 def long_run_check(cycles: int) -> dict:
@@ -729,13 +729,14 @@ def test_a_spent_step_budget_is_one_line_with_the_numbers(preset):
 
 
 @pytest.mark.parametrize(("flat", "words"), [
-    ({"rtol": 0.9}, "non-finite"),
-    ({"method": "rk4", "steps_per_cycle": 4, "beta": 1e8}, "non-finite"),
+    ({"rtol": 0.9}, ("non-finite", "step size fell below round-off")),
+    ({"method": "rk4", "steps_per_cycle": 4, "beta": 1e8}, ("non-finite",)),
 ])
 def test_a_blown_up_run_is_a_clear_error(flat, words):
+    """A run that blows up (NaN, or a step driven to round-off) says so with its numbers."""
     out = run_case("fig3a", flat)
     assert out.status == "clear error", out.summary()
-    assert words in out.message and "steps accepted" in out.message
+    assert any(w in out.message for w in words) and "steps accepted" in out.message
 
 
 def test_cli_step_budget_exits_1_with_one_line_and_no_traceback():

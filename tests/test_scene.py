@@ -142,6 +142,7 @@ def test_fig3a_torsional_frequency_and_packing_by_hand():
         (A, P.T_L): l,
         (A, P.T_W): w,
         (A, P.T_KTH): 1.0 / rho2,
+        (A, P.T_MU_RHO2): 1.0 / rho2,
         (B, P.T_OM): om,
         (B, P.T_OM2): om**2,
         (B, P.T_MU): m,
@@ -154,6 +155,7 @@ def test_fig3a_torsional_frequency_and_packing_by_hand():
         (B, P.T_L): l,
         (B, P.T_W): w,
         (B, P.T_KTH): om**2 / rho2,
+        (B, P.T_MU_RHO2): m / rho2,
     }
     for (base, offset), value in expected.items():
         assert block(p, base, offset) == pytest.approx(value, rel=1e-14), (base, offset)
@@ -175,7 +177,7 @@ def test_fig3a_torsional_frequency_and_packing_by_hand():
         P.P_PHASE0,
         P.P_PERIOD,
     }
-    used |= {b + k for b in (A, B) for k in range(13)}
+    used |= {b + k for b in (A, B) for k in range(14)}
     assert not np.any(p[[i for i in range(P.N_PARAMS) if i not in used]])
 
 

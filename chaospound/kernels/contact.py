@@ -28,8 +28,8 @@ The functions are exactly (bitwise) mirror-symmetric: swapping ``d_lo`` and
 """
 
 import numpy as np
-from numba import njit
 
+from .jit import inline, kernel
 from .powers import power
 
 EPS_SERIES = 0.2  #: |eps| below which the series is used (full contact)
@@ -39,7 +39,7 @@ _RECIP = 1.0 / np.arange(1.0, SERIES_MAX_TERMS + 5.0)
 _RECIP = np.concatenate((np.array([np.inf]), _RECIP))  #: _RECIP[k] = 1 / k
 
 
-@njit(cache=True)
+@kernel
 def moments(j, d_lo, d_hi):
     """Moments M0, M1, M2 of ``max(d, 0)^j`` along the contact line.
 
@@ -67,7 +67,7 @@ def moments(j, d_lo, d_hi):
     return _moments_skewed(j, d_lo, d_hi, mean)
 
 
-@njit(cache=True)
+@kernel
 def _moments_series(j, mean, eps):
     """Binomial series about the mean penetration (full contact, |eps| small).
 
@@ -94,7 +94,7 @@ def _moments_series(j, mean, eps):
     return scale * s0, 0.5 * scale * s1, 0.25 * scale * s2
 
 
-@njit(cache=True)
+@kernel
 def _moments_partial(j, d_lo, d_hi):
     """One end in contact: integrate over the penetrated sub-interval only.
 
@@ -106,16 +106,48 @@ def _moments_partial(j, d_lo, d_hi):
         p, q, sign = d_hi, d_lo, 1.0
     else:
         p, q, sign = d_lo, d_hi, -1.0
-    span = p - q
-    frac = p / span
-    m0 = frac * power(p, j) / (j + 1.0)
-    # int (1-tau)^j (1/2 - f tau) dtau = (j p - (j + 2) q) / (2 (j + 1) (j + 2) (p - q))
-    m1 = sign * m0 * (j * p - (j + 2.0) * q) / (2.0 * (j + 2.0) * span)
+    m0, m1, frac = _partial_01(j, p, q, sign)
     m2 = m0 * (0.25 - frac / (j + 2.0) + 2.0 * frac * frac / ((j + 2.0) * (j + 3.0)))
     return m0, m1, m2
 
 
-@njit(cache=True)
+@inline
+def _partial_01(j, p, q, sign):
+    """M0, M1 and the contact fraction f for one end in contact (see above).
+
+    ``M0 = f p^j / (j + 1)`` and ``M1 = sign M0 (j f + (j + 2) g) / (2 (j + 2))``
+    with ``g = -q / (p - q) >= 0``: sums of non-negative terms, and no
+    reciprocal of the span (it overflows when both ends are subnormal). The
+    right-hand side of every contact step runs this.
+    """
+    span = p - q
+    frac = p / span
+    rest = -q / span
+    inv_12 = 1.0 / ((j + 1.0) * (j + 2.0))
+    m0 = frac * power(p, j) * ((j + 2.0) * inv_12)
+    m1 = sign * m0 * (j * frac + (j + 2.0) * rest) * (0.5 * (j + 1.0) * inv_12)
+    return m0, m1, frac
+
+
+@inline
+def force_moments(j, d_lo, d_hi):
+    """M0 and M1 of ``max(d, 0)^j`` (what the forces need), see :func:`moments`.
+
+    The partial-contact case, the one of corner impacts, is written out here
+    so that it inlines into the right-hand side; full contact calls
+    :func:`moments`.
+    """
+    if d_hi > 0.0 and d_lo <= 0.0:
+        m0, m1, _ = _partial_01(j, d_hi, d_lo, 1.0)
+        return m0, m1
+    if d_lo > 0.0 and d_hi <= 0.0:
+        m0, m1, _ = _partial_01(j, d_lo, d_hi, -1.0)
+        return m0, m1
+    m0, m1, _ = moments(j, d_lo, d_hi)
+    return m0, m1
+
+
+@kernel
 def _moments_skewed(j, d_lo, d_hi, mean):
     """Full contact, clearly non-parallel faces: antiderivatives at the ends.
 
@@ -135,7 +167,7 @@ def _moments_skewed(j, d_lo, d_hi, mean):
     return m0, m1, m2
 
 
-@njit(cache=True)
+@inline
 def line_contact(d_c, slope, half_length, beta, chi):
     """Resultant force and first moment of a Hertz line contact.
 
@@ -161,11 +193,11 @@ def line_contact(d_c, slope, half_length, beta, chi):
     d_hi = d_c + slope * half_length
     if d_lo <= 0.0 and d_hi <= 0.0:
         return 0.0, 0.0, d_lo, d_hi
-    m0, m1, _ = moments(chi, d_lo, d_hi)
+    m0, m1 = force_moments(chi, d_lo, d_hi)
     return beta * m0, beta * 2.0 * half_length * m1, d_lo, d_hi
 
 
-@njit(cache=True)
+@kernel
 def line_potential(d_lo, d_hi, beta, chi):
     """Contact potential ``V = beta / (L (chi + 1)) int d+^(chi+1) dy``."""
     if d_lo <= 0.0 and d_hi <= 0.0:
@@ -174,7 +206,7 @@ def line_potential(d_lo, d_hi, beta, chi):
     return beta * m0 / (chi + 1.0)
 
 
-@njit(cache=True)
+@kernel
 def line_contact_gradient(d_lo, d_hi, half_length, beta, chi):
     """Derivatives of (force, moment) of :func:`line_contact`.
 

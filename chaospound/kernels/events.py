@@ -12,8 +12,7 @@ towards zero inside the step marks an extremum, which is located as a root of
 the rate, and the penetration there decides whether two crossings happened.
 """
 
-from numba import njit
-
+from .jit import kernel
 from .models import contact_ends, contact_force_rate
 from .rk import dense_eval
 
@@ -22,7 +21,7 @@ MAX_ITER = 200  #: iteration cap of the root finders (bisection halves 2^-200)
 FORCE_RATE = 4  #: ``which`` code of the contact force's rate in :func:`end_value`
 
 
-@njit(cache=True)
+@kernel
 def end_value(model, method, q, y, t, h, theta, p, which, work, ends):
     """At t + theta h: ``which`` = 0, 1 the penetrations d_lo, d_hi; 2, 3 their
     rates; 4 the rate of the resultant contact force. The interpolated state is
@@ -34,7 +33,7 @@ def end_value(model, method, q, y, t, h, theta, p, which, work, ends):
     return ends[which]
 
 
-@njit(cache=True)
+@kernel
 def locate_root(model, method, q, y, t, h, p, which, lo, f_lo, hi, f_hi, work, ends):
     """Root in theta of end quantity ``which`` on [lo, hi] where the signs differ.
 
@@ -70,7 +69,7 @@ def locate_root(model, method, q, y, t, h, p, which, lo, f_lo, hi, f_hi, work, e
     return hi
 
 
-@njit(cache=True)
+@kernel
 def locate_extremum(model, method, q, y, t, h, p, end, rate_lo, rate_hi, work, ends):
     """theta where the rate of end ``end`` (0 or 1) vanishes inside the step."""
     return locate_root(model, method, q, y, t, h, p, end + 2, 0.0, rate_lo, 1.0, rate_hi,

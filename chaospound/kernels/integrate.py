@@ -18,9 +18,9 @@ end of the window is followed to its release for its peak and duration.
 """
 
 import numpy as np
-from numba import njit
 
 from .events import FORCE_RATE, end_value, locate_extremum, locate_root
+from .jit import driver, kernel
 from .models import (
     base_model,
     contact_ends,
@@ -101,7 +101,7 @@ MERGE_TOL = 1e-10  #: events closer than this in time are handled together
 MAX_EVENTS = 4  #: per step: two ends, each with at most two crossings
 
 
-@njit(cache=True)
+@driver
 def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps,
                restart, n_samples, strobe, traj, imp, imp_state, stats, tangent_log):
     """Integrate from ``clock`` to the section ``k_end``, recording the window.
@@ -148,6 +148,25 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
         Number of impacts recorded.
     """
     n = y.shape[0]
+    vectors = np.empty((MAX_STAGES + MAX_DENSE + 5, n))
+    scalars = np.empty(18 + MAX_EVENTS)
+    ev_end = np.empty(MAX_EVENTS, dtype=np.int64)
+    return _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
+                       max_steps, restart, n_samples, strobe, traj, imp, imp_state, stats,
+                       tangent_log, vectors, scalars, ev_end)
+
+
+@kernel
+def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps,
+                restart, n_samples, strobe, traj, imp, imp_state, stats, tangent_log, vectors,
+                scalars, ev_end):
+    """:func:`run_cycles` on caller-allocated workspaces.
+
+    Compiled without numba's reference-counting runtime (see
+    :mod:`chaospound.kernels.jit`), so the step loop carries no reference
+    counts on its arrays; only this thin wrapper allocates.
+    """
+    n = y.shape[0]
     base = base_model(model)
     n_base = MODEL_DIMS[base]
     n_vectors = n // n_base - 1 if model >= TANGENT else 0
@@ -156,20 +175,20 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
     capacity = imp.shape[0]
     two_ends = base == TOWERS or base == TOWER_WALL
 
-    # workspaces (allocated once)
-    f0 = np.empty(n)
-    f_new = np.empty(n)
-    y_new = np.empty(n)
-    stage = np.empty((MAX_STAGES, n))
-    dense = np.empty((MAX_DENSE, n))
-    work = np.empty(n)
-    work2 = np.empty(n)
-    ends_old = np.empty(4)
-    ends_new = np.empty(4)
-    ends_tmp = np.empty(4)
-    forces = np.empty(6)
-    ev_theta = np.empty(MAX_EVENTS)
-    ev_end = np.empty(MAX_EVENTS, dtype=np.int64)
+    # workspaces: views of the caller's blocks
+    stage = vectors[:MAX_STAGES]
+    dense = vectors[MAX_STAGES:MAX_STAGES + MAX_DENSE]
+    rest = MAX_STAGES + MAX_DENSE
+    f0 = vectors[rest]
+    f_new = vectors[rest + 1]
+    y_new = vectors[rest + 2]
+    work = vectors[rest + 3]
+    work2 = vectors[rest + 4]
+    ends_old = scalars[0:4]
+    ends_new = scalars[4:8]
+    ends_tmp = scalars[8:12]
+    forces = scalars[12:18]
+    ev_theta = scalars[18:18 + MAX_EVENTS]
 
     k = int(clock[0])
     tau = clock[1]
@@ -431,7 +450,7 @@ def run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed,
     return n_imp
 
 
-@njit(cache=True)
+@kernel
 def _may_cross(d0, d1, slope0, slope1):
     """Whether an extremum of d inside a step can reach the other side of 0.
 
@@ -453,7 +472,7 @@ def _may_cross(d0, d1, slope0, slope1):
     return extreme < margin  # inside: a minimum, can it reach d < 0?
 
 
-@njit(cache=True)
+@kernel
 def _orthonormalize(y, n_base, n_vectors, log_out, row):
     """Modified Gram-Schmidt on the tangent vectors stored after the state.
 
@@ -481,7 +500,7 @@ def _orthonormalize(y, n_base, n_vectors, log_out, row):
             y[a + c] /= norm
 
 
-@njit(cache=True)
+@kernel
 def _landed_short(ends, end, inside, h, rtol, atol):
     """Whether a step landed on a located crossing actually stopped before it.
 
@@ -500,7 +519,7 @@ def _landed_short(ends, end, inside, h, rtol, atol):
     return not towards or abs(d) > slack
 
 
-@njit(cache=True)
+@kernel
 def _all_finite(v, n):
     for i in range(n):
         if not np.isfinite(v[i]):
@@ -508,7 +527,7 @@ def _all_finite(v, n):
     return True
 
 
-@njit(cache=True)
+@kernel
 def _sort_events(theta, end, n_ev):
     """Insertion sort of the (few) events of a step by theta."""
     for i in range(1, n_ev):
@@ -523,7 +542,7 @@ def _sort_events(theta, end, n_ev):
         end[j + 1] = en
 
 
-@njit(cache=True)
+@kernel
 def _record_onset(model, p, t_force, k, period, t0, state, imp, imp_state, row, n, ends):
     """Fill one impact row at onset: time, phase, velocity, corner, state."""
     contact_ends(model, t_force, state, p, ends)
@@ -563,7 +582,7 @@ def _record_onset(model, p, t_force, k, period, t0, state, imp, imp_state, row, 
         imp_state[row, i] = state[i]
 
 
-@njit(cache=True)
+@kernel
 def _corner_label(model, p, s, plus_end):
     """Whose corner is the inner one at the + (y_hi) or - (y_lo) end (MODEL.md 3)."""
     if model == TOWER_WALL:
@@ -578,7 +597,7 @@ def _corner_label(model, p, s, plus_end):
     return CORNER_A_MINUS if h_a >= h_b else CORNER_B_MINUS
 
 
-@njit(cache=True)
+@kernel
 def _update_peak(model, method, dense, y, y_new, t, h, p, ends_old, ends_new, imp, row, work,
                  ends_tmp, forces, two_ends):
     """Raise an episode's peak penetration and peak force with this step's maxima.
@@ -617,14 +636,14 @@ def _update_peak(model, method, dense, y, y_new, t, h, p, ends_old, ends_new, im
                 imp[row, IMP_PEAK_FORCE] = f_m
 
 
-@njit(cache=True)
+@kernel
 def _store_sample(traj, row, t, state, n):
     traj[row, 0] = t
     for i in range(n):
         traj[row, i + 1] = state[i]
 
 
-@njit(cache=True)
+@kernel
 def _store_samples(method, dense, y, t0, k, period, tau, h, n_samples, traj, n_traj, work, n):
     """Interpolated samples on the grid tau = j T / n_samples, 0 < j < n_samples, in (tau, tau + h].
 

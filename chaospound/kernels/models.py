@@ -22,9 +22,9 @@ with ``I0 = (beta/L) int d+^chi dy`` and ``F1 = (beta/L) int d+^chi (y - y_c) dy
 """
 
 import numpy as np
-from numba import njit
 
 from .contact import line_contact, line_contact_gradient, line_potential
+from .jit import driver, inline, kernel
 from .params import (
     DUFFING,
     LORENZ,
@@ -45,6 +45,7 @@ from .params import (
     T_EY,
     T_KTH,
     T_MU,
+    T_MU_RHO2,
     T_OM2,
     T_OMT2,
     T_RHO2,
@@ -60,7 +61,7 @@ from .reference import duffing_rhs, lorenz_rhs
 from .tangent import apply_jvp, linearize
 
 
-@njit(cache=True)
+@kernel
 def rhs(model, t, y, p, out):
     """Time derivative of the state (MODEL.md section 2), into ``out``.
 
@@ -72,25 +73,31 @@ def rhs(model, t, y, p, out):
     rhs_grounded(model, t, y, p, ug, vg, out)
 
 
-@njit(cache=True)
+@inline
 def rhs_grounded(model, t, y, p, ug, vg, out):
     """:func:`rhs` with the ground motion ``(u_g, u_g')`` at t given.
 
     Lets a stepper that evaluates twice at one time (Dormand-Prince's last
-    stage and its FSAL stage) compute the sine and cosine once.
+    stage and its FSAL stage) compute the sine and cosine once. Inlined into
+    the steppers; the variational equations stay out of line.
     """
     if model >= TANGENT:
-        base = model - TANGENT
-        _rhs_base(base, t, y, p, ug, vg, out)
-        n = MODEL_DIMS[base]
-        lin = linearize(base, t, y, p)
-        for i in range(1, y.shape[0] // n):
-            apply_jvp(base, p, lin, y[i * n:(i + 1) * n], out[i * n:(i + 1) * n])
+        _rhs_tangent(model - TANGENT, t, y, p, ug, vg, out)
     else:
         _rhs_base(model, t, y, p, ug, vg, out)
 
 
-@njit(cache=True)
+@kernel
+def _rhs_tangent(base, t, y, p, ug, vg, out):
+    """State and tangent vectors: ``y' = f(y)``, ``V' = J(y) V``."""
+    _rhs_base(base, t, y, p, ug, vg, out)
+    n = MODEL_DIMS[base]
+    lin = linearize(base, t, y, p)
+    for i in range(1, y.shape[0] // n):
+        apply_jvp(base, p, lin, y[i * n:(i + 1) * n], out[i * n:(i + 1) * n])
+
+
+@inline
 def _rhs_base(model, t, y, p, ug, vg, out):
     if model == TOWERS:
         _rhs_towers(y, p, ug, vg, out)
@@ -106,7 +113,7 @@ def _rhs_base(model, t, y, p, ug, vg, out):
         duffing_rhs(t, y, p, out)
 
 
-@njit(cache=True)
+@driver
 def jacobian(model, t, y, p, jac):
     """Analytic Jacobian ``d rhs / d y`` of a base model (n x n), into ``jac``.
 
@@ -126,13 +133,13 @@ def jacobian(model, t, y, p, jac):
             jac[r, c] = column[r]
 
 
-@njit(cache=True)
+@inline
 def base_model(model):
     """The base model of a (possibly tangent) model id."""
     return model - TANGENT if model >= TANGENT else model
 
 
-@njit(cache=True)
+@inline
 def contact_ends(model, t, y, p, out):
     """Penetrations and their rates at the two ends of the contact line.
 
@@ -173,7 +180,7 @@ def contact_ends(model, t, y, p, out):
         out[3] = rate
 
 
-@njit(cache=True)
+@inline
 def penetration_rate(model, t, y, p, y_at):
     """Relative impact velocity ``partial d / partial t`` at global height ``y_at``.
 
@@ -196,7 +203,7 @@ def penetration_rate(model, t, y, p, y_at):
     return y[1] - vg
 
 
-@njit(cache=True)
+@kernel
 def contact_potential(model, t, y, p):
     """Contact potential V (MODEL.md section 3), units of A_g^2 k_Ax."""
     model = base_model(model)
@@ -220,7 +227,7 @@ def contact_potential(model, t, y, p):
     return beta * power(d, chi + 1.0) / (chi + 1.0)
 
 
-@njit(cache=True)
+@kernel
 def contact_forces(model, t, y, p, q_out):
     """Generalised contact forces ``Q = -dV/dq``.
 
@@ -250,7 +257,7 @@ def contact_forces(model, t, y, p, q_out):
     return -q_out[0]
 
 
-@njit(cache=True)
+@kernel
 def contact_force_rate(model, t, y, p, ends):
     """Time derivative of the resultant contact force ``-Q_XA``.
 
@@ -270,7 +277,7 @@ def contact_force_rate(model, t, y, p, ends):
     return beta * chi * power(ends[0], chi - 1.0) * ends[2]
 
 
-@njit(cache=True)
+@kernel
 def energy(model, y, p):
     """Total mechanical energy (MODEL.md section 2), ground motion "none".
 
@@ -291,7 +298,7 @@ def energy(model, y, p):
     return e + contact_potential(model, 0.0, y, p)
 
 
-@njit(cache=True)
+@kernel
 def jacobian_trace(model, p):
     """Constant trace of the Jacobian (MODEL.md section 5): sum of all exponents."""
     model = base_model(model)
@@ -312,7 +319,7 @@ def jacobian_trace(model, p):
 # --------------------------------------------------------------------- helpers
 
 
-@njit(cache=True)
+@inline
 def _towers_gap(model, y, p, ug, y_at):
     """Penetration d(y) at global height ``y_at`` (TOWERS or TOWER_WALL)."""
     y_ca = y[2] + p[TOWER_A + T_EY]
@@ -322,7 +329,7 @@ def _towers_gap(model, y, p, ug, y_at):
     return y[0] - ug - p[P_GAP] - y[4] * (y_at - y_ca)
 
 
-@njit(cache=True)
+@kernel
 def _towers_forces(y, p, q):
     """Line-contact forces between the two towers, into q (6 entries)."""
     th_a = y[4]
@@ -340,7 +347,7 @@ def _towers_forces(y, p, q):
     q[5] = -(moment - (y_cb - y_c) * force)
 
 
-@njit(cache=True)
+@kernel
 def _tower_wall_forces(y, p, ug, q):
     """Line-contact forces between tower A and the ground-borne wall."""
     th_a = y[4]
@@ -353,7 +360,7 @@ def _tower_wall_forces(y, p, ug, q):
     q[2] = moment - (y_ca - y_c) * force
 
 
-@njit(cache=True)
+@inline
 def _tower_accel(p, base, x, vx, yy, vy, th, vth, ug, vg, qx, qy, qth, out, off):
     """Equations of motion of one tower (MODEL.md section 2) into out[off:off+6]."""
     om2 = p[base + T_OM2]
@@ -370,11 +377,11 @@ def _tower_accel(p, base, x, vx, yy, vy, th, vth, ug, vg, qx, qy, qth, out, off)
         -p[base + T_CT] * vth
         - p[base + T_KTH] * (ey * xr - ex * yy)
         - p[base + T_OMT2] * th
-        + mu * qth / p[base + T_RHO2]
+        + p[base + T_MU_RHO2] * qth
     )
 
 
-@njit(cache=True)
+@inline
 def _rhs_towers(y, p, ug, vg, out):
     th_a = y[4]
     th_b = y[10]
@@ -391,7 +398,7 @@ def _rhs_towers(y, p, ug, vg, out):
                  force, th_b * force, q_thb, out, 6)
 
 
-@njit(cache=True)
+@inline
 def _rhs_tower_wall(y, p, ug, vg, out):
     th_a = y[4]
     y_c = p[P_Y_C]
@@ -402,7 +409,7 @@ def _rhs_tower_wall(y, p, ug, vg, out):
                  -force, -th_a * force, moment - (y_ca - y_c) * force, out, 0)
 
 
-@njit(cache=True)
+@inline
 def _rhs_pair(y, p, ug, vg, out):
     d = y[0] - y[2] - p[P_GAP]
     force = p[P_BETA] * power(d, p[P_CHI]) if d > 0.0 else 0.0
@@ -414,7 +421,7 @@ def _rhs_pair(y, p, ug, vg, out):
     out[3] = -p[b + T_CX] * (y[3] - vg) - p[b + T_OM2] * (y[2] - ug) + p[b + T_MU] * force
 
 
-@njit(cache=True)
+@inline
 def _rhs_wall(y, p, ug, vg, out):
     d = y[0] - ug - p[P_GAP]
     force = p[P_BETA] * power(d, p[P_CHI]) if d > 0.0 else 0.0
@@ -423,7 +430,7 @@ def _rhs_wall(y, p, ug, vg, out):
     out[1] = -p[a + T_CX] * (y[1] - vg) - p[a + T_OM2] * (y[0] - ug) - p[a + T_MU] * force
 
 
-@njit(cache=True)
+@kernel
 def _tower_energy(p, base, x, vx, yy, vy, th, vth):
     rho2 = p[base + T_RHO2]
     om2 = p[base + T_OM2]

@@ -53,6 +53,7 @@ T_OMT2 = 9  #: Om_ti^2 = Om_i^2 (l^2 + w^2 + 4|e|^2) / (4 rho^2)
 T_L = 10  #: l_i, plan length along the gap line (y)
 T_W = 11  #: w_i, plan width across the gap (x)
 T_KTH = 12  #: Om_i^2 / rho_i^2 (coupling of translation into torsion)
+T_MU_RHO2 = 13  #: mu_i / rho_i^2 (contact moment into torsional acceleration)
 
 # ------------------------------------------- reference (validation) systems
 REF_0 = 43  #: Lorenz sigma; Duffing damping d

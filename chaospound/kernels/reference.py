@@ -10,19 +10,18 @@ pounding models (model ids LORENZ and DUFFING of :mod:`.params`).
 
 import math
 
-from numba import njit
-
+from .jit import kernel
 from .params import REF_0, REF_1, REF_2, REF_3, REF_4
 
 
-@njit(cache=True)
+@kernel
 def lorenz_rhs(t, y, p, out):
     out[0] = p[REF_0] * (y[1] - y[0])
     out[1] = y[0] * (p[REF_1] - y[2]) - y[1]
     out[2] = y[0] * y[1] - p[REF_2] * y[2]
 
 
-@njit(cache=True)
+@kernel
 def duffing_rhs(t, y, p, out):
     x = y[0]
     out[0] = y[1]

@@ -44,8 +44,8 @@ Hence ``u(0) = y`` exactly and ``u(1) = y_new`` to rounding, with
 import math
 
 import numpy as np
-from numba import njit
 
+from .jit import kernel
 from .models import rhs, rhs_grounded
 from .powers import ground, ground_phase, ground_shifted
 
@@ -345,7 +345,7 @@ DOP853_D[3, 15] = -0.14972683625798562581422125276e+3
 # ====================================================================== steps
 
 
-@njit(cache=True)
+@kernel
 def rk_step(method, model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
     """Advance one step from ``(t, y)`` to ``t + h``; return the error measure.
 
@@ -394,7 +394,7 @@ def rk_step(method, model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
 # =============================================================== dense output
 
 
-@njit(cache=True)
+@kernel
 def dense_prepare(method, model, t, h, y, f0, y_new, f_new, p, K, Q):
     """Fill ``Q`` (MAX_DENSE, n) with the interpolant of the step just taken.
 
@@ -433,7 +433,7 @@ def dense_prepare(method, model, t, h, y, f0, y_new, f_new, p, K, Q):
                 Q[3 + row, i] = h * acc
 
 
-@njit(cache=True)
+@kernel
 def dense_eval(method, Q, y, h, theta, out):
     """Interpolated state at ``t + theta h`` (0 <= theta <= 1), into ``out``.
 
@@ -453,7 +453,7 @@ def dense_eval(method, Q, y, h, theta, out):
         out[i] = y[i] + value
 
 
-@njit(cache=True)
+@kernel
 def dense_eval_derivative(method, Q, y, h, theta, out):
     """Time derivative ``du/dt`` of the interpolant at ``t + theta h``, into ``out``."""
     rows = DENSE_ROWS[method]
@@ -475,7 +475,7 @@ def dense_eval_derivative(method, Q, y, h, theta, out):
 # ======================================================== step-size control
 
 
-@njit(cache=True)
+@kernel
 def step_factor(method, err, err_prev):
     """Factor on h for the next attempt, from this attempt's error measure.
 
@@ -522,7 +522,7 @@ def step_factor(method, err, err_prev):
     raise ValueError("step_factor: unknown method id")
 
 
-@njit(cache=True)
+@kernel
 def initial_step(method, model, t, y, f0, p, rtol, atol, work1, work2):
     """Hairer's automatic initial step (HNW I, sec. II.4; scipy select_initial_step).
 
@@ -561,7 +561,7 @@ def initial_step(method, model, t, y, f0, p, rtol, atol, work1, work2):
 # ==================================================================== helpers
 
 
-@njit(cache=True)
+@kernel
 def _advance(model, t, h, y, f0, p, a, b, c, K, y_new, f_new):
     """Stages of an explicit tableau, the new state and f_new (stored in K too).
 
@@ -598,7 +598,7 @@ _E1, _E3, _E4, _E5, _E6, _E7 = (-71 / 57600, 71 / 16695, -71 / 1920, 17253 / 339
                                 -22 / 525, 1 / 40)
 
 
-@njit(cache=True)
+@kernel
 def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
     """Unrolled Dormand-Prince 5(4) step; same results as the generic tableau loop."""
     n = y.shape[0]
@@ -641,7 +641,7 @@ def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
     return math.sqrt(total / n)
 
 
-@njit(cache=True)
+@kernel
 def _stage(model, t, h, y, p, a, c, s, K, scratch):
     """Stage s: ``K[s] = rhs(t + c_s h, y + h sum_{j<s} a_sj K[j])``."""
     for i in range(y.shape[0]):
@@ -653,7 +653,7 @@ def _stage(model, t, h, y, p, a, c, s, K, scratch):
     rhs(model, t + c[s] * h, scratch, p, K[s])
 
 
-@njit(cache=True)
+@kernel
 def _rms_error(h, y, y_new, K, e, rtol, atol):
     """RMS of ``h sum_j e_j K[j] / (atol + rtol max(|y|, |y_new|))``."""
     n = y.shape[0]
@@ -668,7 +668,7 @@ def _rms_error(h, y, y_new, K, e, rtol, atol):
     return math.sqrt(total / n)
 
 
-@njit(cache=True)
+@kernel
 def _press_error(h, y, f0, K, e, rtol, atol):
     """Numerical Recipes' errmax: ``max_i |yerr_i| / (|y_i| + |h f0_i| + floor) / rtol``.
 
@@ -690,7 +690,7 @@ def _press_error(h, y, f0, K, e, rtol, atol):
     return errmax / rtol
 
 
-@njit(cache=True)
+@kernel
 def _dop853_error(h, y, y_new, K, rtol, atol):
     """Hairer's dop853 error: ``|h| e5^2 / sqrt(n (e5^2 + 0.01 e3^2))`` (scaled RMS sums)."""
     n = y.shape[0]

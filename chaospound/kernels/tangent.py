@@ -18,9 +18,8 @@ The products follow the generalised contact forces of :mod:`.models`::
 with ``dF = F_c dd_c + F_s dslope`` and ``dM = M_c dd_c + M_s dslope``.
 """
 
-from numba import njit
-
 from .contact import line_contact, line_contact_gradient
+from .jit import kernel
 from .params import (
     DUFFING,
     LORENZ,
@@ -41,9 +40,9 @@ from .params import (
     T_EY,
     T_KTH,
     T_MU,
+    T_MU_RHO2,
     T_OM2,
     T_OMT2,
-    T_RHO2,
     TOWER_A,
     TOWER_B,
     TOWER_WALL,
@@ -53,7 +52,7 @@ from .params import (
 from .powers import ground, power
 
 
-@njit(cache=True)
+@kernel
 def linearize(model, t, y, p):
     """State-dependent coefficients of ``J(t, y)`` (a 9-tuple of floats)."""
     if model == TOWERS:
@@ -91,7 +90,7 @@ def linearize(model, t, y, p):
     return y[0], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@kernel
 def apply_jvp(model, p, lin, v, out):
     """``out = J v`` with the coefficients ``lin`` of :func:`linearize`."""
     if model == TOWERS:
@@ -108,10 +107,10 @@ def apply_jvp(model, p, lin, v, out):
         mu_b = p[TOWER_B + T_MU]
         out[1] -= mu_a * d_force
         out[3] += mu_a * (-th_a * d_force - force * v[4])
-        out[5] += mu_a * (d_moment - arm_a * d_force - force * v[2]) / p[TOWER_A + T_RHO2]
+        out[5] += p[TOWER_A + T_MU_RHO2] * (d_moment - arm_a * d_force - force * v[2])
         out[7] += mu_b * d_force
         out[9] += mu_b * (th_b * d_force + force * v[10])
-        out[11] += mu_b * (-d_moment + arm_b * d_force + force * v[8]) / p[TOWER_B + T_RHO2]
+        out[11] += p[TOWER_B + T_MU_RHO2] * (-d_moment + arm_b * d_force + force * v[8])
     elif model == TOWER_WALL:
         _structural_jvp(p, TOWER_A, v, out, 0)
         force, fc, fs, mc, ms, th_a, _, arm_a, _ = lin
@@ -124,7 +123,7 @@ def apply_jvp(model, p, lin, v, out):
         mu_a = p[TOWER_A + T_MU]
         out[1] -= mu_a * d_force
         out[3] += mu_a * (-th_a * d_force - force * v[4])
-        out[5] += mu_a * (d_moment - arm_a * d_force - force * v[2]) / p[TOWER_A + T_RHO2]
+        out[5] += p[TOWER_A + T_MU_RHO2] * (d_moment - arm_a * d_force - force * v[2])
     elif model == PAIR:
         stiffness = lin[0]
         a = TOWER_A
@@ -149,7 +148,7 @@ def apply_jvp(model, p, lin, v, out):
         out[1] = -(p[REF_1] + 3.0 * p[REF_2] * x * x) * v[0] - p[REF_0] * v[1]
 
 
-@njit(cache=True)
+@kernel
 def _structural_jvp(p, base, v, out, off):
     """Contact-free part of one tower's block of ``J v`` (MODEL.md section 2)."""
     om2 = p[base + T_OM2]
