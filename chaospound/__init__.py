@@ -28,6 +28,7 @@ _OTHER_EXPORTS = {
     "run_sweep": "chaospound.sweep",
     "lyapunov_spectrum": "chaospound.dynamics.lyapunov",
     "classify": "chaospound.dynamics.classify",
+    "custom_system": "chaospound.dynamics.system",
 }
 
 __all__ = ["__version__", *_SCENE_EXPORTS, *_OTHER_EXPORTS]
@@ -41,5 +42,9 @@ def __getattr__(name: str) -> object:
     if name in _OTHER_EXPORTS:
         import importlib
 
-        return getattr(importlib.import_module(_OTHER_EXPORTS[name]), name)
+        value = getattr(importlib.import_module(_OTHER_EXPORTS[name]), name)
+        # importing chaospound.simulate bound the package attribute "simulate" to the
+        # module; the function is the export
+        globals()[name] = value
+        return value
     raise AttributeError(f"module 'chaospound' has no attribute {name!r}")

@@ -10,13 +10,24 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .kernels import integrate as kin
-from .kernels.params import MODEL_DIMS, MODEL_NAMES, N_PARAMS, P_PERIOD, P_PERIOD_RATIO
+from .kernels.params import (
+    MODEL_DIMS,
+    MODEL_NAMES,
+    N_PARAMS,
+    P_PERIOD,
+    P_PERIOD_RATIO,
+    P_PHASE0,
+)
 from .kernels.rk import METHOD_NAMES
 from .scene import STATE_NAMES, Scene
+
+if TYPE_CHECKING:
+    from .dynamics.system import System
 
 __all__ = [
     "Impacts",
@@ -116,10 +127,11 @@ class Simulation:
 
     Attributes
     ----------
-    scene : Scene
-        The scene as run.
+    scene : Scene or None
+        The scene as run (None for a custom system).
     model : str
-        The reduction that ran ("wall", "tower-wall", "pair" or "towers").
+        The reduction that ran ("wall", "tower-wall", "pair" or "towers"), or
+        "custom".
     state_names : tuple of str
         Names of the state components, in order.
     impacts, strobe : Impacts, Strobe
@@ -131,7 +143,7 @@ class Simulation:
         contact episode when one was running at the end of the window).
     """
 
-    scene: Scene
+    scene: Scene | None
     model: str
     state_names: tuple[str, ...]
     impacts: Impacts
@@ -141,17 +153,15 @@ class Simulation:
     final_state: np.ndarray
     transient: int = field(default=0)
     record: int = field(default=0)
-
-    @property
-    def period(self) -> float:
-        return self.scene.period
+    period: float = field(default=float("nan"))
+    name: str = field(default="")
 
     def to_json_dict(self) -> dict:
         """JSON-ready summary (the ``--json`` output of ``chaospound simulate``)."""
         imp = self.impacts
         return {
             "model": self.model,
-            "scene": self.scene.to_dict(),
+            "scene": self.scene.to_dict() if self.scene is not None else {"name": self.name},
             "state_names": list(self.state_names),
             "transient_cycles": self.transient,
             "record_cycles": self.record,
@@ -183,8 +193,56 @@ class Simulation:
         }
 
 
+@dataclass(frozen=True)
+class _SceneRun:
+    """What :func:`simulate` needs of a scene or a system."""
+
+    model_id: int
+    model: str
+    n: int
+    p: np.ndarray
+    initial_state: np.ndarray
+    state_names: tuple[str, ...]
+    solver: object  #: anything with method, rtol, atol, steps_per_cycle, max_steps, ...
+    period: float
+    t0: float
+    transient: int
+    record: int
+    name: str
+    run_cycles: object
+    scene: Scene | None = None
+
+    @classmethod
+    def of_scene(cls, scene: Scene) -> _SceneRun:
+        model_id = scene.model_id()
+        return cls(model_id=model_id, model=MODEL_NAMES[model_id], n=MODEL_DIMS[model_id],
+                   p=scene.pack(model_id), initial_state=scene.initial_vector(model_id),
+                   state_names=STATE_NAMES[model_id], solver=scene.solver,
+                   period=scene.period, t0=scene.run.phase * scene.period,
+                   transient=scene.run.transient, record=scene.run.record, name=scene.name,
+                   run_cycles=kin.run_cycles, scene=scene)
+
+    @classmethod
+    def of_system(cls, system) -> _SceneRun:
+        from .dynamics.system import System
+
+        if not isinstance(system, System):
+            raise TypeError(f"expected a Scene or a System, got {type(system).__name__}")
+        if system.scene is not None:
+            return cls.of_scene(system.scene.with_params(
+                method=system.method, rtol=system.rtol, atol=system.atol,
+                steps_per_cycle=system.steps_per_cycle, max_steps=system.max_steps,
+                restart_at_kinks=system.restart_at_kinks))
+        return cls(model_id=system.model_id, model=system.model_name, n=system.dim,
+                   p=system.params, initial_state=np.asarray(system.initial_state, float),
+                   state_names=tuple(system.state_names), solver=system,
+                   period=system.period, t0=float(system.params[P_PHASE0]),
+                   transient=system.transient, record=8, name=system.name,
+                   run_cycles=system.run_cycles)
+
+
 def simulate(
-    scene: Scene,
+    scene: Scene | System,
     *,
     transient: int | None = None,
     record: int | None = None,
@@ -197,8 +255,11 @@ def simulate(
 
     Parameters
     ----------
-    scene : Scene
-        The scene, with its solver and run settings.
+    scene : Scene or System
+        The scene, with its solver and run settings; or a
+        :class:`~chaospound.dynamics.system.System`, e.g. a user's own
+        (:func:`~chaospound.dynamics.system.custom_system`), run with its
+        solver settings (default record window: 8 periods).
     transient, record : int, optional
         Cycles discarded and recorded; default the scene's ``run`` settings
         (paper: 40 + 8).
@@ -224,26 +285,27 @@ def simulate(
         When the step budget runs out, the step size underflows or the state
         becomes non-finite; the message carries the numbers.
     """
-    transient = scene.run.transient if transient is None else int(transient)
-    record = scene.run.record if record is None else int(record)
+    if isinstance(scene, Scene):
+        run = _SceneRun.of_scene(scene)
+    else:
+        run = _SceneRun.of_system(scene)
+    transient = run.transient if transient is None else int(transient)
+    record = run.record if record is None else int(record)
     if transient < 0 or record < 1:
         raise ValueError(f"transient = {transient}, record = {record}: need >= 0 and >= 1")
-    model_id = scene.model_id()
-    n = MODEL_DIMS[model_id]
-    p = scene.pack(model_id)
+    model_id, n, p, solver, period, name = (run.model_id, run.n, run.p, run.solver,
+                                            run.period, run.name)
     if initial_state is None:
-        y_start = scene.initial_vector(model_id)
+        y_start = run.initial_state.copy()
     else:
         y_start = np.asarray(initial_state, dtype=np.float64).copy()
         if y_start.shape != (n,) or not np.all(np.isfinite(y_start)):
             raise ValueError(
                 f"initial_state has shape {y_start.shape}: need {n} finite values "
-                f"({', '.join(STATE_NAMES[model_id])})"
+                f"({', '.join(run.state_names)})"
             )
-    solver = scene.solver
     method = METHOD_NAMES.index(solver.method)
-    period = scene.period
-    t0 = scene.run.phase * period
+    t0 = run.t0
     tau_start = 0.0 if (start_at_section or t0 == 0.0) else -t0
     h_fixed = period / solver.steps_per_cycle
     capacity = impact_capacity or max(64, 16 * (record + 1))
@@ -259,7 +321,7 @@ def simulate(
         imp = np.zeros((capacity, kin.N_IMP_FIELDS))
         imp_state = np.zeros((capacity, n))
         stats = np.zeros(kin.N_STATS, dtype=np.int64)
-        n_imp = kin.run_cycles(
+        n_imp = run.run_cycles(
             model_id, method, p, y, clock, transient, transient + record,
             solver.rtol, solver.atol, h_fixed, solver.max_steps, solver.restart_at_kinks,
             samples_per_cycle, strobe, traj, imp, imp_state, stats, _NO_TANGENT,
@@ -297,9 +359,9 @@ def simulate(
         wall_s=wall,
     )
     return Simulation(
-        scene=scene,
-        model=MODEL_NAMES[model_id],
-        state_names=STATE_NAMES[model_id],
+        scene=run.scene,
+        model=run.model,
+        state_names=run.state_names,
         impacts=impacts,
         strobe=strobe_obj,
         trajectory=trajectory,
@@ -307,6 +369,8 @@ def simulate(
         final_state=y,
         transient=transient,
         record=record,
+        period=period,
+        name=name,
     )
 
 

@@ -275,7 +275,7 @@ def test_classify_rejects_bad_arguments():
         classify(scene, min_transient=50, max_transient=10)
     with pytest.raises(ValueError, match="window"):
         classify(scene, window=10, max_period=16)
-    with pytest.raises(ValueError, match="no pounding scene"):
+    with pytest.raises(ValueError, match="no impacts to classify"):
         classify(duffing())
 
 

@@ -86,6 +86,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..kernels.integrate import CORNER_LABELS
+from ..kernels.params import CUSTOM
 from ..scene import Scene
 from .system import System, as_system
 
@@ -248,16 +249,22 @@ def classify(
     from .lyapunov import lyapunov_spectrum
 
     system = as_system(system_or_scene)
-    if system.scene is None:
+    if system.scene is None and not (system.model_id == CUSTOM and system.engine.has_gap):
         raise ValueError(
-            f"system {system.name!r} has no pounding scene: classify needs impacts "
-            "(use System.from_scene or pass a Scene)"
+            f"system {system.name!r} has no impacts to classify: use a pounding scene "
+            "(a Scene or System.from_scene) or a custom system with a gap function"
         )
     window = max(4 * max_period, 32) if window is None else int(window)
     _check_arguments(min_transient, max_transient, chunk, window, max_period, lyapunov_cycles)
+    # "scene": what simulate runs, the tightened scene or custom system
     scene, rtol_used, atol_used = _classification_scene(system)
     tol = TOL_PER_RTOL * rtol_used if tol is None else _check_tol(tol)
-    weights = length_weights(scene, system.state_names)
+    if system.scene is not None:
+        weights = length_weights(scene, system.state_names)
+        section_phase = scene.run.phase
+    else:  # a custom system: its own units, sections at t = k T
+        weights = np.ones(system.dim)
+        section_phase = 0.0
     start = np.asarray(system.initial_state, dtype=float)
 
     # 1. adaptive transient, 2. record window; a window whose period differs from the
@@ -277,7 +284,7 @@ def classify(
         record = simulate(scene, transient=0, record=window, initial_state=sections[-1][-1],
                           start_at_section=True)
         imp = record.impacts
-        local_phase = _phase_from_section(imp.time, imp.cycle, record.period, scene.run.phase)
+        local_phase = _phase_from_section(imp.time, imp.cycle, record.period, section_phase)
         regime = classify_sequence(
             record.strobe.state * weights, imp.cycle, local_phase, imp.velocity, imp.labels,
             max_period=max_period, tol=tol, test01=False,
@@ -291,7 +298,7 @@ def classify(
     evidence = {
         "rtol": rtol_used,
         "atol": atol_used,
-        "method": scene.solver.method,
+        "method": system.method,
         "model": record.model,
         "window_cycles": window,
         "transient_converged_period": converged,
@@ -313,16 +320,16 @@ def classify(
         cycles = np.concatenate([cycles, extra.cycle + window])
         local_phase = np.concatenate(
             [local_phase, _phase_from_section(extra.time, extra.cycle, more.period,
-                                              scene.run.phase)])
+                                              section_phase)])
         velocity = np.concatenate([velocity, extra.velocity])
         labels = labels + extra.labels
-    spectrum = lyapunov_spectrum(System.from_scene(scene), k=1, transient=0,
+    spectrum = lyapunov_spectrum(as_system(scene), k=1, transient=0,
                                  cycles=lyapunov_cycles, initial_state=last)
     z = spectrum.max_exponent / max(spectrum.max_error, 1e-300)
     if AMBIGUOUS_Z[0] < abs(z) < AMBIGUOUS_Z[1]:
         # near the 3-sigma line a short run decides by chance: average 4x longer
         lyapunov_cycles = LONGER_RUN * lyapunov_cycles
-        spectrum = lyapunov_spectrum(System.from_scene(scene), k=1, transient=0,
+        spectrum = lyapunov_spectrum(as_system(scene), k=1, transient=0,
                                      cycles=lyapunov_cycles, initial_state=last)
     regime = classify_sequence(
         states * weights, cycles, local_phase, velocity, labels,
@@ -531,8 +538,11 @@ def _check_tol(tol: float) -> float:
     return tol
 
 
-def _classification_scene(system: System) -> tuple[Scene, float, float]:
-    """The system's scene with its solver settings, rtol <= 1e-8 (rule 1)."""
+def _classification_scene(system: System) -> tuple[Scene | System, float, float]:
+    """The system's scene with its solver settings, rtol <= 1e-8 (rule 1).
+
+    A custom system (no scene) is returned as a system with those settings.
+    """
     settings = {
         "method": system.method,
         "steps_per_cycle": system.steps_per_cycle,
@@ -540,10 +550,14 @@ def _classification_scene(system: System) -> tuple[Scene, float, float]:
         "restart_at_kinks": system.restart_at_kinks,
     }
     if system.method == "rk4":
-        return system.scene.with_params(**settings), CLASSIFY_RTOL, math.nan
-    rtol = min(system.rtol, CLASSIFY_RTOL)
-    atol = min(system.atol, ATOL_PER_RTOL * rtol)
-    return system.scene.with_params(rtol=rtol, atol=atol, **settings), rtol, atol
+        rtol, atol = CLASSIFY_RTOL, math.nan
+    else:
+        rtol = min(system.rtol, CLASSIFY_RTOL)
+        atol = min(system.atol, ATOL_PER_RTOL * rtol)
+        settings.update(rtol=rtol, atol=atol)
+    if system.scene is None:
+        return system.with_solver(**settings), rtol, atol
+    return system.scene.with_params(**settings), rtol, atol
 
 
 def _phase_from_section(time, cycle, period, section_phase) -> np.ndarray:

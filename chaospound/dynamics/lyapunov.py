@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kernels.models import jacobian_trace
-from ..kernels.params import TANGENT
+from ..kernels.params import CUSTOM, TANGENT
 from ..scene import Scene
 from .system import System, advance, as_system
 
@@ -57,7 +57,8 @@ class Spectrum:
         Periods discarded before the tangent vectors start, periods discarded
         while they align, and periods averaged.
     trace : float
-        Mean trace of the Jacobian (constant for these models): the sum of
+        Mean trace of the Jacobian (constant for the built-in models; NaN for a
+        custom system, whose trace varies along the orbit): the sum of
         all exponents must equal it.
     steps, rhs_evals : int
         Work of the tangent run.
@@ -188,10 +189,17 @@ def lyapunov_spectrum(
         transient=transient,
         tangent_transient=tangent_transient,
         cycles=cycles,
-        trace=float(jacobian_trace(system.model_id, system.params)),
+        trace=_constant_trace(system),
         steps=int(stats[0]),
         rhs_evals=int(stats[2]),
     )
+
+
+def _constant_trace(system: System) -> float:
+    """Trace of the Jacobian of a built-in model (constant); NaN for a custom system."""
+    if system.model_id == CUSTOM:
+        return float("nan")
+    return float(jacobian_trace(system.model_id, system.params))
 
 
 def largest_exponent_two_trajectory(

@@ -190,7 +190,7 @@ def _system_section(system: System, phase: float, transient: int | None, cycles:
     clock = np.array([0.0, -params[P_PHASE0], 0.0])
     strobe = np.full((cycles + 1, n), np.nan)
     stats = np.zeros(kin.N_STATS, dtype=np.int64)
-    kin.run_cycles(
+    system.run_cycles(
         system.model_id, system.method_id, params, y, clock, transient, transient + cycles,
         system.rtol, system.atol, period / system.steps_per_cycle, system.max_steps,
         system.restart_at_kinks, 0, strobe, np.zeros((1, n + 1)),

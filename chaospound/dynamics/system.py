@@ -19,6 +19,7 @@ import numpy as np
 
 from ..kernels import integrate as kin
 from ..kernels.params import (
+    CUSTOM,
     DUFFING,
     LORENZ,
     MODEL_DIMS,
@@ -35,7 +36,7 @@ from ..kernels.params import (
 from ..kernels.rk import METHOD_NAMES
 from ..scene import STATE_NAMES, Scene
 
-__all__ = ["System", "advance", "duffing", "lorenz"]
+__all__ = ["System", "advance", "custom_system", "duffing", "lorenz"]
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,10 @@ class System:
         Default transient, in periods.
     scene : Scene or None
         The scene it came from, if any.
+    n_states : int or None
+        State dimension of a custom system (built-in models know theirs).
+    engine : object or None
+        A custom system's integrator (:func:`chaospound.kernels.custom.compile_engine`).
     """
 
     name: str
@@ -78,6 +83,8 @@ class System:
     restart_at_kinks: bool = True
     transient: int = 40
     scene: Scene | None = field(default=None, compare=False)
+    n_states: int | None = None
+    engine: object = field(default=None, compare=False, repr=False)
 
     @classmethod
     def from_scene(cls, scene: Scene) -> System:
@@ -103,7 +110,12 @@ class System:
 
     @property
     def dim(self) -> int:
-        return MODEL_DIMS[self.model_id]
+        return self.n_states if self.model_id == CUSTOM else MODEL_DIMS[self.model_id]
+
+    @property
+    def run_cycles(self):
+        """The cycle integrator of this system (a custom system has its own)."""
+        return kin.run_cycles if self.engine is None else self.engine.run_cycles
 
     @property
     def method_id(self) -> int:
@@ -157,6 +169,112 @@ def duffing(damping: float = 0.05, linear: float = 0.0, cubic: float = 1.0,
                   state_names=("x", "dx"), transient=100, **solver)
 
 
+_ENGINE_CACHE: dict = {}  #: (rhs, jacobian, gap, n, n_params) -> compiled engine
+
+
+def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
+                  params=(), state_names=None, name: str = "custom", transient: int = 40,
+                  **solver) -> System:
+    """A user's own jitted oscillator as a :class:`System` every analysis accepts.
+
+    Parameters
+    ----------
+    rhs : numba.njit function ``rhs(t, y, q, out)``
+        Writes ``dy/dt`` into ``out`` (time and state in the user's units).
+    jacobian : numba.njit function ``jacobian(t, y, q, jac)``
+        Writes ``d rhs_i / d y_j`` into the n x n array ``jac`` (the Lyapunov
+        spectrum integrates ``V' = J V`` with it).
+    gap : numba.njit function ``gap(t, y, q) -> (g, dg/dt)``, optional
+        Distance to contact and its rate: an impact is an onset of ``g < 0``,
+        located on the dense output and landed on like the towers' contacts;
+        its velocity is ``-dg/dt``.
+    period : float
+        Sampling period T: the forcing period of a forced system (sections are
+        taken every T from t = 0), the re-orthonormalisation interval of an
+        autonomous one.
+    initial_state : sequence of float
+        State at t = 0; its length is the dimension n.
+    params : sequence of float
+        The vector ``q`` handed to the three functions.
+    state_names : sequence of str, optional
+        Labels of the state components (default y0, y1, ...).
+    name : str
+        Label for reports.
+    transient : int
+        Default transient, in periods.
+    **solver
+        method, rtol, atol, steps_per_cycle, max_steps, restart_at_kinks, as in
+        :class:`System`.
+
+    Returns
+    -------
+    System
+        With model "custom". Its integrator is the built-in one with the model
+        layer replaced by these functions (:mod:`chaospound.kernels.custom`),
+        compiled on first use and shared by every system made of the same
+        functions.
+
+    Raises
+    ------
+    ValueError
+        A function that is not jitted or fails on the initial state, a bad
+        period, state, parameter vector or solver setting.
+    """
+    from numba.core.registry import CPUDispatcher
+
+    from ..kernels.custom import compile_engine, pack_custom
+
+    for label, fn in (("rhs", rhs), ("jacobian", jacobian), ("gap", gap)):
+        if fn is not None and not isinstance(fn, CPUDispatcher):
+            raise ValueError(f"{label} must be a numba.njit function, got {type(fn).__name__}")
+    y0 = np.array(initial_state, dtype=np.float64).ravel()
+    q = np.array(params, dtype=np.float64).ravel()
+    if y0.size == 0 or not np.all(np.isfinite(y0)):
+        raise ValueError(f"initial_state = {list(y0)}: need at least one finite number")
+    if not np.all(np.isfinite(q)):
+        raise ValueError(f"params = {list(q)}: need finite numbers")
+    if not (math.isfinite(period) and period > 0.0):
+        raise ValueError(f"period = {period}: need a finite number > 0")
+    method = solver.get("method", "dopri5")
+    if method not in METHOD_NAMES:
+        raise ValueError(f"method = {method!r}: need one of {', '.join(METHOD_NAMES)}")
+    n = y0.size
+    names = tuple(state_names) if state_names is not None else tuple(f"y{i}" for i in range(n))
+    if len(names) != n:
+        raise ValueError(f"state_names has {len(names)} names for {n} states")
+    _check_user_functions(rhs, jacobian, gap, y0, q)
+    key = (rhs, jacobian, gap, n, q.size)
+    if key not in _ENGINE_CACHE:
+        _ENGINE_CACHE[key] = compile_engine(rhs, jacobian, gap, n, q.size)
+    return System(name=name, model_id=CUSTOM, params=pack_custom(float(period), q, n),
+                  initial_state=y0, period=float(period), state_names=names,
+                  transient=int(transient), n_states=n, engine=_ENGINE_CACHE[key], **solver)
+
+
+def _check_user_functions(rhs, jacobian, gap, y0: np.ndarray, q: np.ndarray) -> None:
+    """Call each function once on the initial state: one clear line if it fails."""
+    n = y0.size
+    out = np.zeros(n)
+    jac = np.zeros((n, n))
+    for label, call, result in (
+        ("rhs(t, y, q, out)", lambda: rhs(0.0, y0.copy(), q, out), lambda _: out),
+        ("jacobian(t, y, q, jac)", lambda: jacobian(0.0, y0.copy(), q, jac), lambda _: jac),
+        ("gap(t, y, q)", (lambda: gap(0.0, y0.copy(), q)) if gap is not None else None,
+         lambda r: np.asarray(r, dtype=float)),
+    ):
+        if call is None:
+            continue
+        try:
+            values = result(call())
+        except Exception as exc:  # numba typing errors, IndexError, ...
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise ValueError(f"{label} failed on the initial state: {first}") from None
+        if label.startswith("gap") and values.shape != (2,):
+            raise ValueError(f"{label} must return (g, dg/dt), got {values!r}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"{label} gave non-finite values on the initial state")
+
+
 def advance(system: System, state: np.ndarray, cycles: int, *, model_id: int | None = None,
             tangent_log: np.ndarray | None = None, record_from: int | None = None,
             from_time_zero: bool = False):
@@ -183,9 +301,9 @@ def advance(system: System, state: np.ndarray, cycles: int, *, model_id: int | N
     stats = np.zeros(kin.N_STATS, dtype=np.int64)
     log = np.zeros((0, 0)) if tangent_log is None else tangent_log
     h_fixed = system.period / system.steps_per_cycle
-    kin.run_cycles(model, system.method_id, system.params, y, clock, k_record, cycles, system.rtol,
-                   system.atol, h_fixed, system.max_steps, system.restart_at_kinks, 0, strobe,
-                   traj, imp, imp_state, stats, log)
+    system.run_cycles(model, system.method_id, system.params, y, clock, k_record, cycles,
+                      system.rtol, system.atol, h_fixed, system.max_steps,
+                      system.restart_at_kinks, 0, strobe, traj, imp, imp_state, stats, log)
     status = int(stats[kin.ST_STATUS])
     if status != kin.STATUS_OK:
         from ..simulate import _raise_on_failure

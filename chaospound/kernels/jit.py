@@ -7,9 +7,10 @@ with numpy's error model, so a division is a division (no zero test and
 Python exception path; a zero divisor gives inf or NaN, which the
 integrators report as a non-finite state).
 
-``inline`` is ``kernel`` plus LLVM's always-inline: the right-hand sides, the
-contact geometry and the ground motion, called from every Runge-Kutta stage.
-Out of line, each call passed three arrays field by field.
+``inline`` is ``kernel`` plus LLVM's always-inline: the model bodies, the
+contact geometry and the ground motion, which then compile into one flat
+right-hand side (:func:`chaospound.kernels.models.rhs_grounded`) instead of a
+chain of calls that each pass three arrays field by field.
 
 ``driver`` compiles the kernels that allocate their own workspaces
 (:func:`chaospound.kernels.integrate.run_cycles`,

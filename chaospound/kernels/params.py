@@ -18,10 +18,11 @@ TOWERS = 3  #: the general 12-state torsional model
 
 LORENZ = 4  #: Lorenz (1963) system, a validation case for the Lyapunov engine
 DUFFING = 5  #: forced Duffing oscillator x'' + d x' + a x + b x^3 = g cos(w t)
+CUSTOM = 6  #: a user's jitted system (kernels.custom builds its integrator)
 TANGENT = 8  #: offset of the tangent (variational) models: id = TANGENT + base id
 
 MODEL_NAMES = ("wall", "tower-wall", "pair", "towers")  #: the pounding models
-SYSTEM_NAMES = MODEL_NAMES + ("lorenz", "duffing")  #: every built-in system
+SYSTEM_NAMES = MODEL_NAMES + ("lorenz", "duffing", "custom")  #: every system kind
 MODEL_DIMS = (2, 6, 4, 12, 3, 2)  #: state dimension of each base model
 
 # ------------------------------------------------------------ global entries

@@ -602,7 +602,9 @@ _E1, _E3, _E4, _E5, _E6, _E7 = (-71 / 57600, 71 / 16695, -71 / 1920, 17253 / 339
 def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
     """Unrolled Dormand-Prince 5(4) step; same results as the generic tableau loop."""
     n = y.shape[0]
-    # ground motion at the inner stages by angle addition from the step start
+    # ground motion at the inner stages by angle addition from the step start;
+    # the library sine at t + h is asked for first, off the stages' critical path
+    ug_end, vg_end = ground(t + h, p)  # stages 6 and 7 share the time t + h
     sin0, cos0 = ground_phase(t, p)
     for i in range(n):
         K[0, i] = f0[i]
@@ -625,12 +627,11 @@ def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
     for i in range(n):
         y_new[i] = y[i] + h * (_A61 * K[0, i] + _A62 * K[1, i] + _A63 * K[2, i]
                                + _A64 * K[3, i] + _A65 * K[4, i])
-    ug, vg = ground(t + h, p)  # stages 6 and 7 share the time t + h
-    rhs_grounded(model, t + h, y_new, p, ug, vg, K[5])
+    rhs_grounded(model, t + h, y_new, p, ug_end, vg_end, K[5])
     for i in range(n):
         y_new[i] = y[i] + h * (_B1 * K[0, i] + _B3 * K[2, i] + _B4 * K[3, i]
                                + _B5 * K[4, i] + _B6 * K[5, i])
-    rhs_grounded(model, t + h, y_new, p, ug, vg, f_new)
+    rhs_grounded(model, t + h, y_new, p, ug_end, vg_end, f_new)
     total = 0.0
     for i in range(n):
         K[6, i] = f_new[i]
