@@ -124,6 +124,7 @@ def dask_processes(tmp_path: Path, workers: int = 2):
     (no nanny: a killed worker stays dead) on 127.0.0.1; yields (address, scheduler
     process, worker processes) once every worker has joined."""
     scheduler_file = tmp_path / "scheduler.json"
+    scheduler_file.unlink(missing_ok=True)  # a second cluster must not read the first's address
     dask = [sys.executable, "-m", "dask"]
     log = subprocess.DEVNULL
     scheduler = subprocess.Popen(
