@@ -433,6 +433,17 @@ def test_gap_zero_touching_at_rest_records_impacts(preset):
     assert out.impacts > 0
 
 
+def test_rattling_at_the_noise_floor_records_no_zero_duration_impacts():
+    """gap 0, heavy damping, slow forcing: a tower rattles on the wall with penetrations
+    of ~1e-8 (the default atol). An onset and a release located at one instant (a touch at
+    round-off level, no contact) used to be recorded as an impact of duration 0; every
+    recorded episode now lasts and penetrates."""
+    out = run_case("wall", {"beta": 1e6, "chi": 1.0, "zeta": 1.0, "gap": 0.0,
+                            "period_ratio": 5.0})
+    assert out.status == "finite", out.summary()
+    assert out.impacts > 1000
+
+
 @pytest.mark.parametrize("preset", list(PRESETS))
 def test_touching_at_rest_without_forcing(preset):
     """gap 0, no ground motion, no damping: at rest nothing moves (d = 0 is no contact);

@@ -395,7 +395,15 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
                     episode = -1
             elif active and not now_active:
                 if episode >= 0:
-                    imp[episode, IMP_DURATION] = t_ev + k * period - imp[episode, IMP_TIME]
+                    duration = t_ev + k * period - imp[episode, IMP_TIME]
+                    if duration <= 0.0 and episode == n_imp - 1:
+                        # onset and release at one instant: a touch at round-off level
+                        # (rattling at the integrator's noise floor), no contact, no impact
+                        n_imp -= 1
+                        if peak_row == episode:
+                            peak_row = -1
+                    else:
+                        imp[episode, IMP_DURATION] = duration
                 episode = -1
             active = now_active
         if status != STATUS_OK:
