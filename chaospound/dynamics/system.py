@@ -256,23 +256,30 @@ def _check_user_functions(rhs, jacobian, gap, y0: np.ndarray, q: np.ndarray) -> 
     n = y0.size
     out = np.zeros(n)
     jac = np.zeros((n, n))
-    for label, call, result in (
-        ("rhs(t, y, q, out)", lambda: rhs(0.0, y0.copy(), q, out), lambda _: out),
-        ("jacobian(t, y, q, jac)", lambda: jacobian(0.0, y0.copy(), q, jac), lambda _: jac),
-        ("gap(t, y, q)", (lambda: gap(0.0, y0.copy(), q)) if gap is not None else None,
-         lambda r: np.asarray(r, dtype=float)),
-    ):
-        if call is None:
-            continue
-        try:
-            values = result(call())
-        except Exception as exc:  # numba typing errors, IndexError, ...
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise ValueError(f"{label} failed on the initial state: {first}") from None
-        if label.startswith("gap") and values.shape != (2,):
-            raise ValueError(f"{label} must return (g, dg/dt), got {values!r}")
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"{label} gave non-finite values on the initial state")
+    _checked_call("rhs(t, y, q, out)", rhs, y0, q, out)
+    _require_finite("rhs(t, y, q, out)", out)
+    _checked_call("jacobian(t, y, q, jac)", jacobian, y0, q, jac)
+    _require_finite("jacobian(t, y, q, jac)", jac)
+    if gap is not None:
+        values = np.asarray(_checked_call("gap(t, y, q)", gap, y0, q), dtype=float)
+        if values.shape != (2,):
+            raise ValueError(f"gap(t, y, q) must return (g, dg/dt), got {values!r}")
+        _require_finite("gap(t, y, q)", values)
+
+
+def _checked_call(label: str, fn, y0: np.ndarray, *args):
+    """``fn(0, y0, *args)``; numba's typing errors and the like become one line."""
+    try:
+        return fn(0.0, y0.copy(), *args)
+    except Exception as exc:  # numba typing errors, IndexError, ...
+        text = str(exc).strip()
+        first = text.splitlines()[0] if text else type(exc).__name__
+        raise ValueError(f"{label} failed on the initial state: {first}") from None
+
+
+def _require_finite(label: str, values: np.ndarray) -> None:
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{label} gave non-finite values on the initial state")
 
 
 def advance(system: System, state: np.ndarray, cycles: int, *, model_id: int | None = None,

@@ -38,7 +38,15 @@ from numba import njit
 from numba.core.registry import CPUDispatcher
 
 from . import contact, events, integrate, models, powers, reference, rk, tangent
-from .params import CUSTOM, MODEL_DIMS, N_PARAMS, TANGENT
+from .params import (
+    CUSTOM,
+    MODEL_DIMS,
+    N_PARAMS,
+    P_GROUND,
+    P_PERIOD,
+    P_PERIOD_RATIO,
+    TANGENT,
+)
 
 #: the modules of the engine, callees first
 ENGINE_MODULES = (powers, contact, reference, tangent, models, rk, events, integrate)
@@ -46,8 +54,6 @@ ENGINE_MODULES = (powers, contact, reference, tangent, models, rk, events, integ
 
 def pack_custom(period: float, q: np.ndarray, n: int) -> np.ndarray:
     """The packed vector of a user system: header, ``q``, Jacobian scratch."""
-    from .params import P_GROUND, P_PERIOD, P_PERIOD_RATIO
-
     p = np.zeros(N_PARAMS + q.shape[0] + n * n)
     p[P_PERIOD] = period
     p[P_PERIOD_RATIO] = period / (2.0 * np.pi)
@@ -65,8 +71,7 @@ def compile_engine(rhs: CPUDispatcher, jacobian: CPUDispatcher, gap: CPUDispatch
     types.SimpleNamespace
         ``run_cycles`` (same signature as
         :func:`chaospound.kernels.integrate.run_cycles`, model id ``CUSTOM`` or
-        ``TANGENT + CUSTOM``), the wrappers ``rhs`` and ``contact_ends``, and
-        ``has_gap``.
+        ``TANGENT + CUSTOM``) and ``has_gap``.
         Nothing is compiled until the first call.
     """
     wrappers = _wrappers(rhs, jacobian, gap, n, n_params)
@@ -74,12 +79,11 @@ def compile_engine(rhs: CPUDispatcher, jacobian: CPUDispatcher, gap: CPUDispatch
     # a fresh namespace per module, then every kernel re-created in it
     serial = next(_ENGINES)
     spaces = {m.__name__: dict(vars(m)) for m in ENGINE_MODULES}
-    originals = {}
+    replace = {}  # original kernel -> its clone, or the user-system wrapper
     for m in ENGINE_MODULES:
         for obj in vars(m).values():
             if isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == m.__name__:
-                originals[obj] = _recreate(obj, spaces[m.__name__], serial)
-    replace = dict(originals)
+                replace[obj] = _recreate(obj, spaces[m.__name__], serial)
     for name, wrapper in wrappers.items():
         replace[getattr(models, name)] = wrapper
     for space in spaces.values():
@@ -88,12 +92,8 @@ def compile_engine(rhs: CPUDispatcher, jacobian: CPUDispatcher, gap: CPUDispatch
                 space[name] = replace[obj]
         if "MODEL_DIMS" in space:
             space["MODEL_DIMS"] = dims
-    return types.SimpleNamespace(
-        run_cycles=replace[integrate.run_cycles],
-        rhs=wrappers["rhs"],
-        contact_ends=wrappers["contact_ends"],
-        has_gap=gap is not None,
-    )
+    return types.SimpleNamespace(run_cycles=replace[integrate.run_cycles],
+                                 has_gap=gap is not None)
 
 
 _ENGINES = itertools.count(1)  #: engine serial numbers, part of the clones' symbol names
