@@ -304,7 +304,8 @@ def test_f_new_is_rhs_at_new_state(method):
     work = _Work()
     t, h = 3.2, 0.25
     _step(method, t, h, _exact(t), work)
-    assert np.array_equal(work.f_new, _f(t + h, work.y_new))
+    # DOPRI5 takes the ground's phase at t + h by angle addition from t: a few ulps
+    assert np.allclose(work.f_new, _f(t + h, work.y_new), rtol=4e-16, atol=4e-16)
     assert np.array_equal(work.K[rk.N_STAGES[method]], work.f_new)
 
 

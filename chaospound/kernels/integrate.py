@@ -45,14 +45,17 @@ from .params import (
     TOWER_WALL,
     TOWERS,
 )
+from .powers import ground_phase
 from .rk import (
     DENSE_EVALS,
+    DOPRI5,
     MAX_DENSE,
     MAX_STAGES,
     NEW_EVALS,
     RK4,
     dense_eval,
     dense_prepare,
+    dopri5_step,
     initial_step,
     rk_step,
     step_factor,
@@ -96,6 +99,7 @@ STATUS_NONFINITE = 4  #: the state became NaN or infinite
 GRAZE_MARGIN = 0.25  #: relative margin of the graze pre-test (see _may_cross)
 GRAZE_FLOOR = 1e-6  #: absolute margin of the graze pre-test (units of A_g)
 LAND_SLACK = 1e-8  #: a landing may miss its crossing by this much time, no more
+LAND_ERR = 4.0  #: ... or by this many units of atol + rtol max(1, |y|) (see _landed_short)
 FOLLOW_CYCLES = 5  #: cycles an episode running at the window's end is followed
 MERGE_TOL = 1e-10  #: events closer than this in time are handled together
 MAX_EVENTS = 4  #: per step: two ends, each with at most two crossings
@@ -207,6 +211,9 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
         stats[ST_RHS_EVALS] += 1
 
     contact_ends(model, t0 + tau, y, p, ends_old)
+    sin0, cos0 = ground_phase(t0 + tau, p)  # carried from step to step (DOPRI5)
+    sin1 = sin0
+    cos1 = cos0
     inside_lo = ends_old[0] > 0.0
     inside_hi = ends_old[1] > 0.0 if two_ends else inside_lo
     active = inside_lo or inside_hi
@@ -215,6 +222,8 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
     n_traj = 0
     err_prev = 1e-4
     rejected_last = False
+    short_end = -1  # end whose crossing the last accepted step landed short of
+    short_next = -1
     record_done = k >= k_end
     at_section = tau == 0.0
     seg_end = 0.0 if tau < 0.0 else period
@@ -254,7 +263,11 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
             h_try = to_end
             reaches_end = True
         t_here = t0 + tau
-        err = rk_step(method, model, t_here, h_try, y, f0, p, rtol, atol, stage, y_new, f_new)
+        if method == DOPRI5:
+            err, sin1, cos1 = dopri5_step(model, t_here, h_try, y, f0, p, rtol, atol, stage,
+                                          y_new, f_new, sin0, cos0)
+        else:
+            err = rk_step(method, model, t_here, h_try, y, f0, p, rtol, atol, stage, y_new, f_new)
         stats[ST_RHS_EVALS] += NEW_EVALS[method]
         if not np.isfinite(err) or not _all_finite(y_new, n):
             if method == RK4 or h_try < 1e-14 * max(1.0, period):
@@ -293,10 +306,14 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
                 dense_prepare(method, model, t_here, h_try, y, f0, y_new, f_new, p, stage, dense)
                 stats[ST_RHS_EVALS] += DENSE_EVALS[method]
                 dense_ready = True
-            s_old = 1.0 if inside else -1.0  # conventional sign at theta = 0
+            # value at theta = 0: the true one when on the side of `inside`, else a
+            # conventional one (an end landed on exactly, or just short of, 0)
+            d_old = ends_old[end]
+            if d_old == 0.0 or (d_old > 0.0) != inside:
+                d_old = 1e-300 if inside else -1e-300
             if crossing:
                 theta = locate_root(model, method, dense, y, t_here, h_try, p, end, 0.0,
-                                    s_old * 1e-300, 1.0, d_new, work, ends_tmp)
+                                    d_old, 1.0, d_new, h_try * rate_new, work, ends_tmp)
                 ev_theta[n_ev] = theta
                 ev_end[n_ev] = end
                 n_ev += 1
@@ -307,26 +324,34 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
                                 work, ends_tmp)
                 if (d_m > 0.0) != inside:  # two crossings inside the step
                     theta = locate_root(model, method, dense, y, t_here, h_try, p, end, 0.0,
-                                        s_old * 1e-300, theta_m, d_m, work, ends_tmp)
+                                        d_old, theta_m, d_m, 0.0, work, ends_tmp)
                     ev_theta[n_ev] = theta
                     ev_end[n_ev] = end
                     n_ev += 1
                     theta2 = locate_root(model, method, dense, y, t_here, h_try, p, end,
-                                         theta_m, d_m, 1.0, -d_m, work, ends_tmp)
+                                         theta_m, d_m, 1.0, -d_m, 0.0, work, ends_tmp)
                     ev_theta[n_ev] = theta2
                     ev_end[n_ev] = end
                     n_ev += 1
 
         truncated_to_event = False
+        short_next = -1
         if n_ev > 0:
             _sort_events(ev_theta, ev_end, n_ev)
             stats[ST_EVENTS] += 1
             first = ev_theta[0]
-            if restart and first * h_try > MERGE_TOL and (1.0 - first) * h_try > MERGE_TOL:
-                # redo the step so that it ends on the earliest event
+            if (restart and first * h_try > MERGE_TOL and (1.0 - first) * h_try > MERGE_TOL
+                    and ev_end[0] != short_end):
+                # redo the step so that it ends on the earliest event (unless the last
+                # step already landed short of this end's crossing: a poor interpolant,
+                # e.g. a blown-up run, could make the landings creep forward forever)
                 h_ev = first * h_try
-                err2 = rk_step(method, model, t_here, h_ev, y, f0, p, rtol, atol, stage, y_new,
-                               f_new)
+                if method == DOPRI5:
+                    err2, sin1, cos1 = dopri5_step(model, t_here, h_ev, y, f0, p, rtol, atol,
+                                                   stage, y_new, f_new, sin0, cos0)
+                else:
+                    err2 = rk_step(method, model, t_here, h_ev, y, f0, p, rtol, atol, stage,
+                                   y_new, f_new)
                 stats[ST_RHS_EVALS] += NEW_EVALS[method]
                 if not np.isfinite(err2) or (method != RK4 and err2 > 1.0):
                     stats[ST_REJECTED] += 1
@@ -370,7 +395,8 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
                 t_ev = t_here + theta * h_try
                 end_value(model, method, dense, y, t_here, h_try, theta, p, 0, work, ends_tmp)
             if theta >= 1.0 and _landed_short(ends_new, end, inside_lo if end == 0 else inside_hi,
-                                              h_try, rtol, atol):
+                                              y_new, n_base, rtol, atol):
+                short_next = end
                 continue  # the landed state is still clearly before the crossing
             if end == 0:
                 inside_lo = not inside_lo
@@ -420,6 +446,8 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
 
         stats[ST_ACCEPTED] += 1
         tau += h_try
+        sin0 = sin1  # the ground's phase at the new step start (DOPRI5's carry)
+        cos0 = cos1
         for i in range(n):
             y[i] = y_new[i]
             f0[i] = f_new[i]
@@ -439,6 +467,7 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
                 h_next = max(h_try * fac, h_prop)
             h = h_next
         rejected_last = False
+        short_end = short_next
 
         # ---- section reached
         if reaches_end:
@@ -446,6 +475,7 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
                 k += 1
             tau = 0.0
             at_section = True
+            sin0, cos0 = ground_phase(t0, p)
             rhs(model, t0, y, p, f0)
             stats[ST_RHS_EVALS] += 1
             contact_ends(model, t0, y, p, ends_old)
@@ -509,21 +539,27 @@ def _orthonormalize(y, n_base, n_vectors, log_out, row):
 
 
 @kernel
-def _landed_short(ends, end, inside, h, rtol, atol):
+def _landed_short(ends, end, inside, y, n_base, rtol, atol):
     """Whether a step landed on a located crossing actually stopped before it.
 
-    The root was located on the interpolant; the step's own end state can
-    still be on the old side. Within the interpolant's accuracy
-    (``atol + rtol |d'| h`` in penetration, or ``LAND_SLACK`` in time) the
-    crossing counts; further away, or moving away from 0, it has not happened
-    yet and the next step will find it.
+    The root was located on the long step's interpolant and the step redone to
+    end there, so the landed state misses the surface by about the local
+    error (up to ~2.4 units of ``atol + rtol S``, ``S = max(1, |y|)``, measured
+    at rtol 1e-6). Within LAND_ERR such units, or LAND_SLACK in time, of the
+    surface, and moving towards it, the crossing counts: the force is
+    ``max(d, 0)^chi`` whatever the flag says, so only the bookkeeping changes.
+    Further away, or moving away from 0, it has not happened yet and the next
+    step will find it (a re-detection costs a root search and a tiny step).
     """
     d = ends[end]
     rate = ends[end + 2]
     if d == 0.0 or (d > 0.0) != inside:
         return False
     towards = rate < 0.0 if inside else rate > 0.0
-    slack = max(abs(rate) * LAND_SLACK, atol + rtol * abs(rate) * h)
+    size = 1.0
+    for i in range(n_base):
+        size = max(size, abs(y[i]))
+    slack = max(abs(rate) * LAND_SLACK, LAND_ERR * (atol + rtol * size))
     return not towards or abs(d) > slack
 
 
@@ -637,7 +673,7 @@ def _update_peak(model, method, dense, y, y_new, t, h, p, ends_old, ends_new, im
         rate_new = contact_force_rate(model, t + h, y_new, p, ends_new)
         if rate_old > 0.0 and rate_new < 0.0:
             theta = locate_root(model, method, dense, y, t, h, p, FORCE_RATE, 0.0, rate_old,
-                                1.0, rate_new, work, ends_tmp)
+                                1.0, rate_new, 0.0, work, ends_tmp)
             end_value(model, method, dense, y, t, h, theta, p, 0, work, ends_tmp)
             f_m = contact_forces(model, t + theta * h, work, p, forces)
             if f_m > imp[row, IMP_PEAK_FORCE]:

@@ -67,18 +67,17 @@ _C7 = -1.0 / 87178291200.0
 
 
 @inline
-def ground_shifted(sin0, cos0, shift, p):
-    """Ground motion at ``t + shift`` from ``sin(t/r)`` and ``cos(t/r)``.
+def phase_shifted(sin0, cos0, shift, p):
+    """``(sin, cos)`` of the ground's phase at ``t + shift`` from their values at t.
 
     Angle addition with ``x = shift / r``; for ``|x| <= SHIFT_MAX`` sin x and cos x
     are their Taylor polynomials to x^13 and x^14 in Horner form (truncation
-    below 1e-19, so the result equals the direct evaluation to rounding), else
-    the library's.
+    below 1e-19, so the result equals the direct evaluation to a few ulps),
+    else the library's. ``(0, 1)`` without ground motion, as :func:`ground_phase`.
     """
     if p[P_GROUND] == 0.0:
-        return 0.0, 0.0
-    r = p[P_PERIOD_RATIO]
-    x = shift / r
+        return 0.0, 1.0
+    x = shift / p[P_PERIOD_RATIO]
     if abs(x) <= SHIFT_MAX:
         x2 = x * x
         sin_x = x + x * x2 * (_S1 + x2 * (_S2 + x2 * (_S3 + x2 * (_S4 + x2 * (_S5 + x2 * _S6)))))
@@ -87,7 +86,19 @@ def ground_shifted(sin0, cos0, shift, p):
     else:
         sin_x = math.sin(x)
         cos_x = math.cos(x)
-    return sin0 * cos_x + cos0 * sin_x, (cos0 * cos_x - sin0 * sin_x) / r
+    return sin0 * cos_x + cos0 * sin_x, cos0 * cos_x - sin0 * sin_x
+
+
+@inline
+def ground_shifted(sin0, cos0, shift, p):
+    """Ground motion ``(u_g, u_g')`` at ``t + shift`` from ``sin(t/r)`` and ``cos(t/r)``.
+
+    See :func:`phase_shifted`; ``(0, 0)`` without ground motion.
+    """
+    if p[P_GROUND] == 0.0:
+        return 0.0, 0.0
+    sin_t, cos_t = phase_shifted(sin0, cos0, shift, p)
+    return sin_t, cos_t / p[P_PERIOD_RATIO]
 
 
 @inline
@@ -97,3 +108,14 @@ def ground_phase(t, p):
         return 0.0, 1.0
     arg = t / p[P_PERIOD_RATIO]
     return math.sin(arg), math.cos(arg)
+
+
+@inline
+def ground_at_phase(sin_x, cos_x, p):
+    """``(u_g, u_g')`` from ``(sin(t/r), cos(t/r))`` of :func:`ground_phase`.
+
+    Bitwise what :func:`ground` returns at the same t.
+    """
+    if p[P_GROUND] == 0.0:
+        return 0.0, 0.0
+    return sin_x, cos_x / p[P_PERIOD_RATIO]

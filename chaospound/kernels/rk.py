@@ -47,7 +47,7 @@ import numpy as np
 
 from .jit import kernel
 from .models import rhs, rhs_grounded
-from .powers import ground, ground_phase, ground_shifted
+from .powers import ground_at_phase, ground_phase, ground_shifted, phase_shifted
 
 # ------------------------------------------------------------------ methods
 DOPRI5 = 0
@@ -378,7 +378,9 @@ def rk_step(method, model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
         RK4: 0.
     """
     if method == DOPRI5:
-        return _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new)
+        sin0, cos0 = ground_phase(t, p)
+        err, _, _ = dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new, sin0, cos0)
+        return err
     if method == CASH_KARP:
         _advance(model, t, h, y, f0, p, CASH_KARP_A, CASH_KARP_B, CASH_KARP_C, K, y_new, f_new)
         return _press_error(h, y, f0, K, CASH_KARP_E, rtol, atol)
@@ -494,14 +496,17 @@ def step_factor(method, err, err_prev):
         return 1.0
     rejected = not (err <= 1.0)
     if method == DOPRI5:
+        # powers as exp(log): a third cheaper than pow here, and the step
+        # controller needs no last-ulp accuracy (every accepted step runs this)
         if rejected:
             if math.isnan(err):
                 return DOPRI5_MIN_FACTOR
-            return min(1.0, max(DOPRI5_MIN_FACTOR, SAFETY * err ** -DOPRI5_EXPONENT))
+            factor = SAFETY * math.exp(-DOPRI5_EXPONENT * math.log(err))
+            return min(1.0, max(DOPRI5_MIN_FACTOR, factor))
         if err == 0.0:
             return DOPRI5_MAX_FACTOR
         prev = max(err_prev, ERR_FLOOR)
-        factor = SAFETY * err ** -DOPRI5_EXPONENT * prev ** DOPRI5_BETA
+        factor = SAFETY * math.exp(DOPRI5_BETA * math.log(prev) - DOPRI5_EXPONENT * math.log(err))
         return min(DOPRI5_MAX_FACTOR, max(DOPRI5_MIN_FACTOR, factor))
     if method == DOP853:
         if rejected:
@@ -599,13 +604,18 @@ _E1, _E3, _E4, _E5, _E6, _E7 = (-71 / 57600, 71 / 16695, -71 / 1920, 17253 / 339
 
 
 @kernel
-def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
-    """Unrolled Dormand-Prince 5(4) step; same results as the generic tableau loop."""
+def dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new, sin0, cos0):
+    """Unrolled Dormand-Prince 5(4) step; same results as the generic tableau loop.
+
+    ``sin0, cos0`` are :func:`powers.ground_phase` at t (the ground's phase,
+    carried from the previous step by a driver); returns ``(err, sin1, cos1)``
+    with the phase at ``t + h`` for the next step. Otherwise as :func:`rk_step`.
+    """
     n = y.shape[0]
-    # ground motion at the inner stages by angle addition from the step start;
-    # the library sine at t + h is asked for first, off the stages' critical path
-    ug_end, vg_end = ground(t + h, p)  # stages 6 and 7 share the time t + h
-    sin0, cos0 = ground_phase(t, p)
+    # ground motion at every stage by angle addition from the step start (no
+    # library sine in the step; the driver resets the phase at each section)
+    sin1, cos1 = phase_shifted(sin0, cos0, h, p)
+    ug_end, vg_end = ground_at_phase(sin1, cos1, p)  # stages 6 and 7 share t + h
     for i in range(n):
         K[0, i] = f0[i]
         y_new[i] = y[i] + h * (_A21 * f0[i])
@@ -639,7 +649,7 @@ def _dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new):
                    + _E6 * K[5, i] + _E7 * f_new[i])
         scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
         total += (err / scale) ** 2
-    return math.sqrt(total / n)
+    return math.sqrt(total / n), sin1, cos1
 
 
 @kernel
