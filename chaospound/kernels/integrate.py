@@ -102,6 +102,7 @@ LAND_SLACK = 1e-8  #: a landing may miss its crossing by this much time, no more
 LAND_ERR = 4.0  #: ... or by this many units of atol + rtol max(1, |y|) (see _landed_short)
 FOLLOW_CYCLES = 5  #: cycles an episode running at the window's end is followed
 MERGE_TOL = 1e-10  #: events closer than this in time are handled together
+LAND_SHIFT_MAX = 1e-3  #: largest move of a landed event onto its crossing, in steps
 MAX_EVENTS = 4  #: per step: two ends, each with at most two crossings
 
 
@@ -388,16 +389,19 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
             theta = ev_theta[i]
             end = ev_end[i]
             if theta >= 1.0:
-                t_ev = t_here + h_try
+                if _landed_short(ends_new, end, inside_lo if end == 0 else inside_hi, y_new,
+                                 n_base, rtol, atol):
+                    short_next = end
+                    continue  # the landed state is still clearly before the crossing
+                # the landed state misses the surface by about the local error: the
+                # event's time and state are moved onto it to first order
+                shift = _crossing_shift(ends_new[end], ends_new[end + 2], h_try)
+                t_ev = t_here + h_try + shift
                 for j in range(n):
-                    work[j] = y_new[j]
+                    work[j] = y_new[j] + shift * f_new[j]
             else:
                 t_ev = t_here + theta * h_try
                 end_value(model, method, dense, y, t_here, h_try, theta, p, 0, work, ends_tmp)
-            if theta >= 1.0 and _landed_short(ends_new, end, inside_lo if end == 0 else inside_hi,
-                                              y_new, n_base, rtol, atol):
-                short_next = end
-                continue  # the landed state is still clearly before the crossing
             if end == 0:
                 inside_lo = not inside_lo
                 if not two_ends:
@@ -561,6 +565,24 @@ def _landed_short(ends, end, inside, y, n_base, rtol, atol):
         size = max(size, abs(y[i]))
     slack = max(abs(rate) * LAND_SLACK, LAND_ERR * (atol + rtol * size))
     return not towards or abs(d) > slack
+
+
+@kernel
+def _crossing_shift(d, rate, h):
+    """Time from a landed state to its end's crossing, ``-d / d'`` (first order).
+
+    A landing ends on the root of the long step's interpolant, which misses the
+    true crossing by about the local error (a few ``atol + rtol |y|`` in d); the
+    event is recorded at ``t + shift`` with the state ``y + shift y'``, which
+    leaves an O(shift^2) error. 0 when the shift would not be small against the
+    step (a rate near 0: a graze, whose root the linearisation cannot find).
+    """
+    if d == 0.0 or rate == 0.0:
+        return 0.0
+    shift = -d / rate
+    if abs(shift) > LAND_SHIFT_MAX * h:
+        return 0.0
+    return shift
 
 
 @kernel
