@@ -439,7 +439,9 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     add_scene_options(parser)
     group = parser.add_argument_group("benchmark")
     group.add_argument(
-        "--repeats", type=_count, default=5, metavar="N", help="timed runs each, best counts (5)"
+        "--repeats", type=_count, default=5, metavar="N",
+        help="timing rounds (5): chaospound 6x around one run of each solve_ivp variant;"
+        " the best of each counts",
     )
     group.add_argument(
         "--no-cli", action="store_true", help="skip timing 'chaospound simulate' in a subprocess"
