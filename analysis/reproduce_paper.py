@@ -1279,8 +1279,9 @@ figures and tables.
 Verdicts. **Agrees**: Fig. 3 (3-1 at A+ B- A+ = C F C, exact mirror image);
 translational spectrum mostly periodic; the spectrum's shape is kept when e
 doubles and its maximum drops by {ecc_p99} % at the 99th percentile
-({ecc_adaptive} % on the 170-point adaptive grid), but only by {ecc_max} % for
-the single largest impact; the maxima rise near T_Atheta and T_Bx as the
+({ecc_adaptive} % on the 170-point adaptive grid; {ecc_max} % for the single
+largest impact, an extreme value that scatters from run to run); the maxima
+rise near T_Atheta and T_Bx as the
 paper says. **Partly**: the windows 0.68-0.77 and 0.93-0.95 (narrower: 3-1
 only at 0.70-0.74, 8-2 only at 0.94-0.95); "most torsional impacts chaotic"
 holds with the paper's visual criterion ({tor_aperiodic} of the impacting
