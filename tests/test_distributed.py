@@ -294,14 +294,18 @@ def test_scheduler_killed_mid_sweep_then_resume(cluster, tmp_path):
     are in the file: exit 1 with one line; the file opens, its done points are complete;
     --resume completes it locally (and, from a copy, on Dask) to the uninterrupted file.
 
-    Slow suite: in 2 of about 8 runs of the whole default suite a connection to a fresh
-    scheduler timed out after 30 s (and the test failed once in about 12 runs on its
-    own); the scheduler's log now goes to tmp_path for the next time it happens."""
+    The file is removed before each attempt: when the first, shorter sweep finished
+    before the kill, the second attempt read the first one's finished file, killed its
+    fresh scheduler before the CLI had connected and got "cannot reach the Dask
+    scheduler" (the flake once seen in about 1 of 8 suite runs; every run once the
+    kernels got fast enough to finish 120 points in a second). The scheduler's log
+    goes to tmp_path."""
     path, partial_copy = tmp_path / "killed-scheduler.h5", tmp_path / "copy.h5"
     options = ["transient=100", "record=2", "rtol=1e-6"]  # the CLI's order of overrides
     sweep = [sys.executable, "-m", "chaospound", "sweep", "--preset", "fig4", "--transient",
              "100", "--record", "2", "--rtol", "1e-6", "--quiet", "--chunk", "2"]
     for n in (120, 480):  # a longer sweep if the first one finished before the kill
+        path.unlink(missing_ok=True)  # not the previous attempt's file: this one's
         grid = f"period_ratio=0.3:2.0#{n}"
         with dask_processes(tmp_path) as (address, scheduler, _):
             proc = subprocess.Popen([*sweep, "--param", grid, "-o", str(path), "--overwrite",
