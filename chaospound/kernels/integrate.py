@@ -48,16 +48,14 @@ from .params import (
 from .powers import ground_phase
 from .rk import (
     DENSE_EVALS,
-    DOPRI5,
     MAX_DENSE,
     MAX_STAGES,
     NEW_EVALS,
     RK4,
+    carried_step,
     dense_eval,
     dense_prepare,
-    dopri5_step,
     initial_step,
-    rk_step,
     step_factor,
 )
 
@@ -212,9 +210,7 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
         stats[ST_RHS_EVALS] += 1
 
     contact_ends(model, t0 + tau, y, p, ends_old)
-    sin0, cos0 = ground_phase(t0 + tau, p)  # carried from step to step (DOPRI5)
-    sin1 = sin0
-    cos1 = cos0
+    sin0, cos0 = ground_phase(t0 + tau, p)  # carried from step to step (carried_step)
     inside_lo = ends_old[0] > 0.0
     inside_hi = ends_old[1] > 0.0 if two_ends else inside_lo
     active = inside_lo or inside_hi
@@ -264,11 +260,8 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
             h_try = to_end
             reaches_end = True
         t_here = t0 + tau
-        if method == DOPRI5:
-            err, sin1, cos1 = dopri5_step(model, t_here, h_try, y, f0, p, rtol, atol, stage,
-                                          y_new, f_new, sin0, cos0)
-        else:
-            err = rk_step(method, model, t_here, h_try, y, f0, p, rtol, atol, stage, y_new, f_new)
+        err, sin1, cos1 = carried_step(method, model, t_here, h_try, y, f0, p, rtol, atol,
+                                       stage, y_new, f_new, sin0, cos0)
         stats[ST_RHS_EVALS] += NEW_EVALS[method]
         if not np.isfinite(err) or not _all_finite(y_new, n):
             if method == RK4 or h_try < 1e-14 * max(1.0, period):
@@ -347,12 +340,8 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
                 # step already landed short of this end's crossing: a poor interpolant,
                 # e.g. a blown-up run, could make the landings creep forward forever)
                 h_ev = first * h_try
-                if method == DOPRI5:
-                    err2, sin1, cos1 = dopri5_step(model, t_here, h_ev, y, f0, p, rtol, atol,
-                                                   stage, y_new, f_new, sin0, cos0)
-                else:
-                    err2 = rk_step(method, model, t_here, h_ev, y, f0, p, rtol, atol, stage,
-                                   y_new, f_new)
+                err2, sin1, cos1 = carried_step(method, model, t_here, h_ev, y, f0, p, rtol,
+                                                atol, stage, y_new, f_new, sin0, cos0)
                 stats[ST_RHS_EVALS] += NEW_EVALS[method]
                 if not np.isfinite(err2) or (method != RK4 and err2 > 1.0):
                     stats[ST_REJECTED] += 1
@@ -450,7 +439,7 @@ def _run_cycles(model, method, p, y, clock, k_record, k_end, rtol, atol, h_fixed
 
         stats[ST_ACCEPTED] += 1
         tau += h_try
-        sin0 = sin1  # the ground's phase at the new step start (DOPRI5's carry)
+        sin0 = sin1  # the ground's phase at the new step start
         cos0 = cos1
         for i in range(n):
             y[i] = y_new[i]
