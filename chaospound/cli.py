@@ -903,6 +903,7 @@ def _add_sweep(commands: argparse._SubParsersAction) -> None:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    from chaospound.store import StoreWriteError
     from chaospound.sweep import SweepInterrupted, SweepSpec, axes_from_scene, parse_axes, run_sweep
 
     if args.resume and args.overwrite:
@@ -955,6 +956,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     except ClusterUnavailable as exc:
         return _fail(f"{exc}; the points written so far are kept: finish with "
                      f"chaospound sweep ... -o {args.output} --resume", EXIT_FAILURE)
+    except StoreWriteError as exc:  # full disk, I/O error: committed points are kept
+        return _fail(str(exc), EXIT_FAILURE)
     except OSError as exc:
         raise CliError(f"cannot write {args.output!r}: {exc.strerror or exc}") from None
     finally:
@@ -985,9 +988,18 @@ def _check_sweep_output(path: str, *, resume: bool, overwrite: bool) -> None:
         raise CliError(f"output {path!r} is a directory")
     if not os.path.isdir(folder):
         raise CliError(f"output {path!r}: folder {folder!r} does not exist")
-    if not os.path.exists(path):
+    from chaospound.lock import holder
+
+    running = holder(path)
+    if running is not None:
+        raise CliError(f"output {path!r}: a running sweep ({running}) is writing it; wait for "
+                       "it to finish or stop it first")
+    if resume or overwrite:
         return
-    if not (resume or overwrite):
+    if os.path.exists(path + ".journal"):
+        raise CliError(f"output {path!r}: an interrupted sweep's journal exists (use --resume "
+                       "to finish it or --overwrite to replace it)")
+    if os.path.exists(path):
         raise CliError(f"output {path!r} exists (use --resume to finish it or --overwrite "
                        "to replace it)")
 

@@ -1,6 +1,25 @@
-"""HDF5 store of bifurcation sweeps: schema, incremental writes, resume, reading.
+"""Crash-safe store of bifurcation sweeps: a journal while running, one HDF5 file at the end.
 
-Schema (format "chaospound-sweep", version 1)::
+Life of a sweep writing ``X.h5`` (see docs/store.md for the reasons)
+    1. ``X.h5.lock`` is taken (:mod:`chaospound.lock`): one writer per output;
+       a live holder is named and refused, a stale lock (its holder died) is
+       taken over.
+    2. Finished points are committed to the journal ``X.h5.journal``
+       (:mod:`chaospound.journal`, SQLite in WAL mode): every batch is one
+       atomic, fsynced transaction. A kill at any moment leaves every
+       committed point intact and nothing half-written.
+    3. When every point is done the journal is consolidated into
+       ``X.h5.tmp-<pid>``, which is fsynced and renamed onto ``X.h5``
+       atomically; only then is the journal removed. A kill during
+       consolidation leaves the journal, and ``--resume`` consolidates again.
+
+While the journal exists it is the truth: :func:`open_sweep` on ``X.h5``
+reads the journal (the points done so far, the others pending), so a running
+or interrupted sweep can be inspected and plotted; ``resume`` continues it.
+An ``X.h5`` that is not yet finished (written by chaospound 0.1's in-place
+store) is imported into a journal on resume.
+
+Schema of the finished file (format "chaospound-sweep", version 1)::
 
     /                         attrs: format, format_version, chaospound_version,
                                      scene (TOML), scene_resolved (JSON), sweep (JSON),
@@ -22,25 +41,24 @@ Schema (format "chaospound-sweep", version 1)::
         wall_s                (N,) float64 (timing field)
         impact_start, impact_count   (N,) int64: rows of the point's impacts
         impacts/{time, phase, velocity, corner, peak_penetration, peak_force, duration}
-                              flat, appended in the branch's order (corner: int8 code)
+                              flat, in the branch's visiting order (corner: int8 code)
         strobe_start, strobe_count   (N,) int64
         strobe/state          (M, n) flat stroboscopic states
+        attrs: impacts_committed, strobe_committed (the flat arrays' lengths), REGIMES
 
-Per-point arrays are indexed by the grid index (row-major over the axes).
-Crash safety: every batch is written, flushed, and only then are the points'
-statuses set to done and flushed; the flat arrays' committed lengths are
-branch attributes (impacts_committed, strobe_committed). A killed run
-therefore leaves a file that opens and in which every point marked done is
-complete; :func:`SweepWriter` on resume truncates the flat arrays to the rows
-of the points marked done or failed, so the resumed file equals an
-uninterrupted run's (timing fields aside). A file that a running sweep holds
-open can be read (:func:`open_sweep`) but not resumed.
+Per-point arrays are indexed by the grid index (row-major over the axes). The
+file is a pure function of the sweep's definition and its points' results:
+files from 1 or N workers, Dask, or any sequence of kills and resumes are
+bitwise equal apart from the timing fields.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import shutil
+import sqlite3
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,7 +66,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-__all__ = ["FORMAT", "REGIMES", "SweepFile", "SweepStoreError", "SweepWriter", "open_sweep"]
+from .journal import SUFFIX as JOURNAL_SUFFIX
+from .journal import Journal, JournalError, encode_point, fsync_dir, journal_path
+from .journal import remove as remove_journal
+from .lock import OutputBusy, OutputLock
+
+__all__ = ["FORMAT", "REGIMES", "StoreWriteError", "SweepFile", "SweepStoreError",
+           "SweepWriter", "open_sweep"]
 
 FORMAT = "chaospound-sweep"
 FORMAT_VERSION = 1
@@ -68,13 +92,38 @@ IMPACT_FIELDS = ("time", "phase", "velocity", "corner", "peak_penetration", "pea
 TIMING_FIELDS = ("wall_s", "created")
 MESSAGE_LENGTH = 240
 SEQUENCE_LENGTH = 160  #: room for 53 corner labels of one period
-LIVE_READ_ATTEMPTS = 20  #: reads of a file that a running sweep is writing ...
-LIVE_READ_PAUSE = 0.05  #: ... this many seconds apart
 CHUNK = 4096
+CONSOLIDATE_BATCH = 256  #: points decoded at a time while consolidating (bounded memory)
+#: per-point scalar datasets: name -> (dtype, fill value)
+SCALARS = {
+    "status": (np.int8, STATUS_PENDING),
+    "message": (f"S{MESSAGE_LENGTH}", b""),
+    "regime": (np.int8, 0),
+    "impacts_per_period": (np.int16, -1),
+    "period_cycles": (np.int16, -1),
+    "transient_used": (np.int32, -1),
+    "corner_sequence": (f"S{SEQUENCE_LENGTH}", b""),
+    "strobe_mismatch": (np.float64, np.nan),
+    "zero_one": (np.float64, np.nan),
+    "max_exponent": (np.float64, np.nan),
+    "max_exponent_error": (np.float64, np.nan),
+    "wall_s": (np.float64, np.nan),
+    "steps": (np.int64, 0),
+    "rejected": (np.int64, 0),
+    "rhs_evals": (np.int64, 0),
+    "impact_start": (np.int64, 0),
+    "impact_count": (np.int64, 0),
+    "strobe_start": (np.int64, 0),
+    "strobe_count": (np.int64, 0),
+}
 
 
 class SweepStoreError(ValueError):
-    """A file that is not a chaospound sweep store, or does not match the sweep."""
+    """A file that is not a chaospound sweep store, or does not match the sweep (exit 2)."""
+
+
+class StoreWriteError(OSError):
+    """Storage failed (full disk, I/O error): committed points are safe (exit 1)."""
 
 
 @dataclass
@@ -104,12 +153,12 @@ class PointResult:
 
 
 class SweepWriter:
-    """Create or resume a sweep file and append finished points to it.
+    """Create or resume a sweep, commit finished points, and consolidate the file.
 
     Parameters
     ----------
     path : str or Path
-        The HDF5 file.
+        The HDF5 file the finished sweep becomes.
     meta : dict
         Root attributes (scene TOML, resolved scene, sweep definition, ...).
     grid : dict[str, ndarray]
@@ -121,9 +170,15 @@ class SweepWriter:
     n_exponents : int
         Number of Lyapunov exponents stored per point (0: none).
     resume : bool
-        Open an existing file of the same sweep and keep its finished points.
+        Continue the sweep's journal, or an unfinished file, keeping its points.
     overwrite : bool
-        Replace an existing file.
+        Start again; an existing file is replaced only when the new one is finished.
+
+    Raises
+    ------
+    SweepStoreError
+        Existing output without ``resume``/``overwrite``, a different sweep, a
+        foreign file, or a live sweep holding the output.
     """
 
     def __init__(self, path, meta: dict, grid: dict, branches: dict, n_state: int,
@@ -131,108 +186,182 @@ class SweepWriter:
         self.path = Path(path)
         self.n_state = n_state
         self.n_exponents = n_exponents
+        self.journal: Journal | None = None
+        self.finished = False  #: resume found the file finished: nothing to do
         self._started = time.perf_counter()
-        if self.path.exists() and not (resume or overwrite):
-            raise SweepStoreError(f"{self.path}: file exists (use --resume to finish it or "
-                                  "--overwrite to replace it)")
-        if resume and self.path.exists():
-            with _open_readonly(self.path) as f:  # never open a foreign file for writing
-                _check_same_sweep(f, self.path, meta, grid, branches)
-            self.file = _open_for_append(self.path)
-            for name in branches:
-                _truncate_uncommitted(self.file[name])
-            self.file.flush()
-        else:
-            if not self.path.parent.exists():
-                raise SweepStoreError(f"{self.path}: directory {self.path.parent} does not exist")
-            tmp = self.path.with_name(self.path.name + ".part")
-            with h5py.File(tmp, "w", track_order=True) as f:
-                _create_layout(f, meta, grid, branches, n_state, n_exponents)
-            os.replace(tmp, self.path)
-            self.file = h5py.File(self.path, "r+")
+        if self.path.is_dir():
+            raise SweepStoreError(f"{self.path}: is a directory")
+        if not self.path.parent.is_dir():
+            raise SweepStoreError(f"{self.path}: directory {self.path.parent} does not exist")
+        try:
+            self.lock = OutputLock(self.path)
+        except OutputBusy as exc:
+            raise SweepStoreError(str(exc)) from None
+        except OSError as exc:
+            raise SweepStoreError(f"{self.path}: cannot create files in {self.path.parent} "
+                                  f"({exc.strerror or exc})") from None
+        try:
+            self._open(meta, grid, branches, resume, overwrite)
+        except BaseException:
+            self.close()
+            raise
+        self._pos = {}
+        for name, order in branches.items():
+            pos = np.empty(len(order), dtype=np.int64)
+            pos[np.asarray(order, dtype=np.int64)] = np.arange(len(order))
+            self._pos[name] = pos
+
+    def _open(self, meta, grid, branches, resume: bool, overwrite: bool) -> None:
+        jpath = journal_path(self.path)
+        _remove_temporaries(self.path)
+        attrs = _root_attributes(meta)
+        create = {"attrs": attrs, "grid": grid, "orders": branches, "n_state": self.n_state,
+                  "n_exponents": self.n_exponents}
+        if jpath.exists() and not overwrite:
+            if not resume:
+                raise SweepStoreError(
+                    f"{self.path}: an interrupted sweep's journal exists ({jpath.name}; use "
+                    "--resume to finish it or --overwrite to replace it)")
+            try:
+                self.journal = Journal.open(jpath)
+            except JournalError as exc:
+                raise SweepStoreError(str(exc)) from None
+            _check_same_sweep(self.journal.attrs, self.path, meta)
+            return
+        if self.path.exists() and not overwrite:
+            if not resume:
+                raise SweepStoreError(f"{self.path}: file exists (use --resume to finish it or "
+                                      "--overwrite to replace it)")
+            with _open_readonly(self.path) as f:
+                _check_same_sweep({k: _attr(v) for k, v in f.attrs.items()}, self.path, meta)
+                if all(_is_finished(f[b]) for b in branches):
+                    self.finished = True
+                    return
+                created = str(_attr(f.attrs.get("created", "")))
+                self.journal = self._create_journal(jpath, create, created)
+                _import_unfinished(f, self.journal, branches)
+            return
+        self.journal = self._create_journal(jpath, create, time.strftime("%Y-%m-%dT%H:%M:%S"))
+
+    def _create_journal(self, jpath: Path, create: dict, created: str) -> Journal:
+        try:
+            return Journal.create(jpath, created=created, **create)
+        except sqlite3.Error as exc:
+            remove_journal(jpath)
+            raise StoreWriteError(f"{self.path}: cannot create the journal {jpath.name} "
+                                  f"({_short(exc)})") from None
 
     # ------------------------------------------------------------- queries
     def pending(self, branch: str) -> np.ndarray:
         """Boolean mask over grid indices of the points still to compute."""
-        return self.file[branch]["status"][:] == STATUS_PENDING
+        if self.journal is None:
+            return np.zeros(len(self._pos[branch]), dtype=bool)
+        return self.journal.statuses(branch) == STATUS_PENDING
 
     def final_state(self, branch: str, index: int) -> np.ndarray | None:
-        group = self.file[branch]
-        if group["status"][index] != STATUS_DONE:
+        """The last stroboscopic state of a done point (continuation restarts from it)."""
+        if self.journal is None:
             return None
-        return group["final_state"][index]
+        fields = self.journal.payload(branch, index)
+        if fields is None or int(fields["status"]) != STATUS_DONE:
+            return None
+        return fields["final_state"]
+
+    def committed(self) -> int:
+        """Finished points in the journal, over all branches."""
+        if self.journal is None:
+            return 0
+        return sum(self.journal.counts(b)[0] for b in self.journal.branches)
+
+    def regime_counts(self) -> dict[str, int]:
+        """Regime name -> finished points, over all branches (including earlier runs)."""
+        if self.journal is None:
+            with _open_readonly(self.path) as f:
+                codes = np.concatenate([f[b]["regime"][()] for b in self._pos])
+            values, counts = np.unique(codes, return_counts=True)
+            return {REGIMES[int(v)]: int(c) for v, c in zip(values, counts, strict=True)}
+        return {REGIMES[code]: n for code, n in self.journal.regime_counts().items()}
 
     # -------------------------------------------------------------- writes
     def write(self, branch: str, results: list[PointResult]) -> None:
-        """Append a batch of finished points (in the branch's order) and commit it."""
+        """Commit a batch of finished points: one durable transaction.
+
+        Raises
+        ------
+        StoreWriteError
+            The journal could not be written (full disk, I/O error); the batch
+            is rolled back, everything committed before stays.
+        """
         if not results:
             return
-        group = self.file[branch]
-        imp_rows = group.attrs["impacts_committed"]
-        strobe_rows = group.attrs["strobe_committed"]
-        new_imp = sum(len(r.impacts["time"]) for r in results)
-        new_strobe = sum(r.strobe.shape[0] for r in results)
-        impacts = group["impacts"]
-        for field in IMPACT_FIELDS:
-            data = np.concatenate([r.impacts[field] for r in results]) if new_imp else None
-            ds = impacts[field]
-            ds.resize((imp_rows + new_imp,))
-            if new_imp:
-                ds[imp_rows:] = data
-        ds = group["strobe"]["state"]
-        ds.resize((strobe_rows + new_strobe, self.n_state))
-        if new_strobe:
-            ds[strobe_rows:] = np.concatenate([r.strobe for r in results])
-        idx = np.array([r.index for r in results])
-        order = np.argsort(idx)
-        idx_sorted = idx[order]
-        contiguous = int(idx_sorted[-1]) - int(idx_sorted[0]) + 1 == len(idx_sorted)
-        where = slice(int(idx_sorted[0]), int(idx_sorted[-1]) + 1) if contiguous else idx_sorted
-
-        def put(name, values, dtype=None):
-            arr = np.asarray(values, dtype=dtype)[order]
-            group[name][where] = arr
-
-        counts = np.array([len(r.impacts["time"]) for r in results], dtype=np.int64)
-        starts = imp_rows + np.concatenate(([0], np.cumsum(counts)[:-1]))
-        s_counts = np.array([r.strobe.shape[0] for r in results], dtype=np.int64)
-        s_starts = strobe_rows + np.concatenate(([0], np.cumsum(s_counts)[:-1]))
-        put("impact_start", starts)
-        put("impact_count", counts)
-        put("strobe_start", s_starts)
-        put("strobe_count", s_counts)
-        put("message", [r.message.encode("utf-8")[:MESSAGE_LENGTH] for r in results],
-            dtype=f"S{MESSAGE_LENGTH}")
-        put("regime", [REGIMES.index(r.regime) for r in results], dtype=np.int8)
-        for name in ("impacts_per_period", "period_cycles"):
-            put(name, [getattr(r, name) for r in results], dtype=np.int16)
-        put("transient_used", [r.transient_used for r in results], dtype=np.int32)
-        put("corner_sequence", [r.corner_sequence.encode("ascii")[:SEQUENCE_LENGTH]
-                                for r in results], dtype=f"S{SEQUENCE_LENGTH}")
-        for name in ("strobe_mismatch", "zero_one", "max_exponent", "max_exponent_error",
-                     "wall_s"):
-            put(name, [getattr(r, name) for r in results], dtype=np.float64)
-        for name in ("steps", "rejected", "rhs_evals"):
-            put(name, [getattr(r, name) for r in results], dtype=np.int64)
-        put("final_state", np.stack([r.final_state for r in results]))
-        if self.n_exponents:
-            put("exponents", np.stack([
-                r.exponents if r.exponents is not None else np.full(self.n_exponents, np.nan)
-                for r in results]))
-        self.file.flush()
-        # commit: statuses and the flat arrays' lengths, after the data is on disk
-        put("status", [r.status for r in results], dtype=np.int8)
-        group.attrs["impacts_committed"] = imp_rows + new_imp
-        group.attrs["strobe_committed"] = strobe_rows + new_strobe
-        self.file.attrs["wall_s"] = (float(self.file.attrs.get("wall_s", 0.0))
-                                     + time.perf_counter() - self._started)
+        pos = self._pos[branch]
+        rows = []
+        for r in results:
+            fields = _point_fields(r, self.n_exponents)
+            rows.append((int(r.index), int(pos[r.index]), int(r.status),
+                         int(fields["regime"]), int(fields["impact_count"]),
+                         int(fields["strobe_count"]), encode_point(fields)))
+        elapsed = time.perf_counter() - self._started
+        try:
+            self.journal.commit(branch, rows, elapsed)
+        except sqlite3.Error as exc:
+            with contextlib.suppress(sqlite3.Error):
+                self.journal.conn.rollback()
+            raise StoreWriteError(
+                f"{self.path}: cannot commit to the journal ({_short(exc)}); the "
+                f"{self.committed()} points committed before are safe: free space and finish "
+                "with --resume") from None
         self._started = time.perf_counter()
-        self.file.flush()
+
+    def finish(self) -> None:
+        """Consolidate the journal into the HDF5 file (atomic rename), then remove it.
+
+        Raises
+        ------
+        StoreWriteError
+            Not enough space or a write error: the journal is kept, ``--resume``
+            consolidates again.
+        """
+        if self.journal is None:
+            return
+        for b in self.journal.branches:
+            missing = self.journal.orders[b].size - self.journal.counts(b)[0]
+            if missing:
+                raise RuntimeError(f"{self.path}: {missing} points of branch {b!r} are "
+                                   "pending; the sweep is not finished")
+        needed = int(1.2 * self.journal.payload_bytes()) + (1 << 20)
+        free = shutil.disk_usage(self.path.parent).free
+        if free < needed:
+            raise StoreWriteError(
+                f"{self.path}: not enough free space to write the file ({needed >> 20} MB "
+                f"needed, {free >> 20} MB free); all points are safe in the journal: free "
+                "space and run --resume")
+        tmp = self.path.with_name(f"{self.path.name}.tmp-{os.getpid()}")
+        try:
+            with h5py.File(tmp, "w", track_order=True) as f:
+                _consolidate(f, self.journal)
+            _fsync_file(tmp)
+            os.replace(tmp, self.path)
+            fsync_dir(self.path.parent)
+        except (OSError, RuntimeError, ValueError) as exc:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise StoreWriteError(f"{self.path}: cannot write the file ({_short(exc)}); all "
+                                  "points are safe in the journal: run --resume") from None
+        jpath = self.journal.path
+        self.journal.close()
+        self.journal = None
+        remove_journal(jpath)
+        fsync_dir(self.path.parent)
 
     def close(self) -> None:
-        if getattr(self, "file", None) is not None:
-            self.file.close()
-            self.file = None
+        """Close the journal (kept for --resume unless finished) and release the lock."""
+        if self.journal is not None:
+            self.journal.close()
+            self.journal = None
+        lock = getattr(self, "lock", None)
+        if lock is not None:
+            lock.release()
 
     def __enter__(self) -> SweepWriter:
         return self
@@ -249,21 +378,33 @@ class SweepFile:
 
     def __init__(self, path) -> None:
         self.path = Path(path)
-        for attempt in range(LIVE_READ_ATTEMPTS):
-            f, live = _open_for_reading(self.path)
+        self.live = False  #: read from the journal of a running or interrupted sweep
+        jpath = journal_path(self.path)
+        if jpath.exists():
             try:
-                with f:
-                    self._read(f)
-                return
-            except (OSError, KeyError, ValueError) as exc:
-                if isinstance(exc, SweepStoreError):
-                    raise
-                # a running sweep may be writing what we read: read again, a moment later
-                if not live or attempt == LIVE_READ_ATTEMPTS - 1:
-                    what = "while a sweep writes it " if live else ""
-                    raise SweepStoreError(f"{self.path}: cannot read the sweep store {what}"
+                journal = Journal.open(jpath, readonly=True)
+            except JournalError as exc:
+                if jpath.exists():
+                    raise SweepStoreError(str(exc)) from None
+            else:  # the journal is the truth while it exists
+                try:
+                    with h5py.File(f"{jpath}.view", "w", driver="core",
+                                   backing_store=False) as f, journal.snapshot():
+                        _consolidate(f, journal)
+                        self._read(f)
+                except sqlite3.Error as exc:
+                    raise SweepStoreError(f"{jpath}: cannot read the journal "
                                           f"({_short(exc)})") from None
-                time.sleep(LIVE_READ_PAUSE)
+                finally:
+                    journal.close()
+                self.live = True
+                return
+        with _open_readonly(self.path) as f:
+            try:
+                self._read(f)
+            except (OSError, KeyError, ValueError) as exc:
+                raise SweepStoreError(f"{self.path}: cannot read the sweep store "
+                                      f"({_short(exc)})") from None
 
     def _read(self, f: h5py.File) -> None:
         self.meta = {k: _attr(v) for k, v in f.attrs.items()}
@@ -274,11 +415,7 @@ class SweepFile:
         self._data = {}
         for b in self.branches:
             g = f[b]
-            # statuses first: in a file still being written, the data of every point
-            # seen as done was flushed before its status
-            arrays = {"status": g["status"][:]}
-            arrays.update({name: g[name][:] for name in g
-                           if name != "status" and isinstance(g[name], h5py.Dataset)})
+            arrays = {name: g[name][:] for name in g if isinstance(g[name], h5py.Dataset)}
             arrays["impacts"] = {name: g["impacts"][name][:] for name in IMPACT_FIELDS}
             arrays["strobe"] = g["strobe"]["state"][:]
             self._data[b] = arrays
@@ -339,12 +476,202 @@ class SweepFile:
 
 
 def open_sweep(path) -> SweepFile:
-    """Open a sweep store for reading (also a partially written one).
+    """Open a sweep store for reading: a finished file, or a running or interrupted sweep.
 
-    A file that a running sweep holds open is read without HDF5's file lock:
-    the points it shows as done are complete, later ones read as pending.
+    While a sweep's journal exists (the sweep runs, or was interrupted and not
+    yet resumed) its committed points are read from it, the others read as
+    pending.
     """
+    path = Path(path)
+    if path.name.endswith(JOURNAL_SUFFIX):  # the journal itself: read its sweep
+        path = path.with_name(path.name[: -len(JOURNAL_SUFFIX)])
     return SweepFile(path)
+
+
+def sweep_progress(path) -> tuple[int, int]:
+    """(points finished, points in the grid) of a sweep, cheaply (no data is read)."""
+    path = Path(path)
+    jpath = journal_path(path)
+    if jpath.exists():
+        with contextlib.suppress(JournalError, sqlite3.Error):
+            journal = Journal.open(jpath, readonly=True)
+            try:
+                with journal.snapshot():
+                    done = sum(journal.counts(b)[0] for b in journal.branches)
+                return done, sum(journal.orders[b].size for b in journal.branches)
+            finally:
+                journal.close()
+    with _open_readonly(path) as f:
+        branches = json.loads(_attr(f.attrs["sweep"]))["branches"]
+        status = [f[b]["status"][()] for b in branches]
+        return (int(sum((s != STATUS_PENDING).sum() for s in status)),
+                int(sum(s.size for s in status)))
+
+
+# ================================================================ consolidation
+
+
+def _root_attributes(meta: dict) -> dict:
+    attrs = {"format": FORMAT, "format_version": FORMAT_VERSION, "units": json.dumps(UNITS)}
+    attrs.update(meta)
+    return attrs
+
+
+def _point_fields(r: PointResult, n_exponents: int) -> dict[str, np.ndarray]:
+    """A point's values, converted exactly as the HDF5 datasets store them."""
+    fields = {
+        "status": np.int8(r.status),
+        "message": np.frombuffer(r.message.encode("utf-8")[:MESSAGE_LENGTH], dtype=np.uint8),
+        "regime": np.int8(REGIMES.index(r.regime)),
+        "impacts_per_period": np.int16(r.impacts_per_period),
+        "period_cycles": np.int16(r.period_cycles),
+        "transient_used": np.int32(r.transient_used),
+        "corner_sequence": np.frombuffer(r.corner_sequence.encode("ascii")[:SEQUENCE_LENGTH],
+                                         dtype=np.uint8),
+        "strobe_mismatch": np.float64(r.strobe_mismatch),
+        "zero_one": np.float64(r.zero_one),
+        "max_exponent": np.float64(r.max_exponent),
+        "max_exponent_error": np.float64(r.max_exponent_error),
+        "wall_s": np.float64(r.wall_s),
+        "steps": np.int64(r.steps),
+        "rejected": np.int64(r.rejected),
+        "rhs_evals": np.int64(r.rhs_evals),
+        "impact_count": np.int64(len(r.impacts["time"])),
+        "strobe_count": np.int64(r.strobe.shape[0]),
+        "final_state": np.asarray(r.final_state, dtype=np.float64),
+        "strobe": np.asarray(r.strobe, dtype=np.float64),
+    }
+    if n_exponents:
+        fields["exponents"] = (np.asarray(r.exponents, dtype=np.float64)
+                               if r.exponents is not None else np.full(n_exponents, np.nan))
+    for name in IMPACT_FIELDS:
+        dtype = np.int8 if name == "corner" else np.float64
+        fields[f"impacts/{name}"] = np.asarray(r.impacts[name], dtype=dtype)
+    return fields
+
+
+def _consolidate(f: h5py.File, journal: Journal) -> None:
+    """Write the whole store from a journal (pending points keep their fill values)."""
+    attrs = dict(journal.attrs)
+    attrs["created"] = journal.created
+    attrs["wall_s"] = journal.wall_s
+    for key, value in attrs.items():
+        f.attrs[key] = value
+    g = f.create_group("grid")
+    for name, values in journal.grid.items():
+        g.create_dataset(name, data=values)
+    for branch in journal.branches:
+        _write_branch(f.create_group(branch), journal, branch)
+
+
+def _write_branch(b: h5py.Group, journal: Journal, branch: str) -> None:
+    order = journal.orders[branch]
+    n_points, n_state, k = order.size, journal.n_state, journal.n_exponents
+    _, n_impacts, n_strobe = journal.counts(branch)
+    b.attrs["impacts_committed"] = n_impacts
+    b.attrs["strobe_committed"] = n_strobe
+    b.attrs["REGIMES"] = json.dumps(REGIMES)
+    b.create_dataset("order", data=order)
+    compressed = {"compression": "gzip", "shuffle": True}
+    for name, (dtype, fill) in SCALARS.items():
+        b.create_dataset(name, shape=(n_points,), dtype=dtype, fillvalue=fill,
+                         chunks=(min(n_points, CHUNK),), **compressed)
+    vectors = {"final_state": n_state, **({"exponents": k} if k else {})}
+    for name, width in vectors.items():
+        b.create_dataset(name, shape=(n_points, width), dtype=np.float64, fillvalue=np.nan,
+                         chunks=(min(n_points, CHUNK), width), **compressed)
+    imp = b.create_group("impacts")
+    for field in IMPACT_FIELDS:
+        imp.create_dataset(field, shape=(n_impacts,), maxshape=(None,),
+                           dtype=np.int8 if field == "corner" else np.float64,
+                           chunks=(CHUNK,), **compressed)
+    strobe = b.create_group("strobe").create_dataset(
+        "state", shape=(n_strobe, n_state), maxshape=(None, n_state), dtype=np.float64,
+        chunks=(CHUNK // 4, n_state), **compressed)
+    imp_row = strobe_row = 0
+    for batch in journal.rows_in_order(branch, CONSOLIDATE_BATCH):
+        idx = np.array([i for i, _ in batch], dtype=np.int64)
+        points = [fields for _, fields in batch]
+        counts = np.array([p["impact_count"] for p in points], dtype=np.int64)
+        s_counts = np.array([p["strobe_count"] for p in points], dtype=np.int64)
+        columns = {
+            "impact_start": imp_row + np.concatenate(([0], np.cumsum(counts)[:-1])),
+            "strobe_start": strobe_row + np.concatenate(([0], np.cumsum(s_counts)[:-1])),
+            "message": np.array([p["message"].tobytes() for p in points],
+                                dtype=f"S{MESSAGE_LENGTH}"),
+            "corner_sequence": np.array([p["corner_sequence"].tobytes() for p in points],
+                                        dtype=f"S{SEQUENCE_LENGTH}"),
+        }
+        for name, (dtype, _) in SCALARS.items():
+            if name not in columns:
+                columns[name] = np.array([p[name] for p in points], dtype=dtype)
+        for name in vectors:
+            columns[name] = np.stack([p[name] for p in points])
+        sort = np.argsort(idx)
+        where = _index(idx[sort])
+        for name, values in columns.items():
+            b[name][where] = values[sort]
+        new_imp, new_strobe = int(counts.sum()), int(s_counts.sum())
+        if new_imp:
+            for field in IMPACT_FIELDS:
+                imp[field][imp_row:imp_row + new_imp] = np.concatenate(
+                    [p[f"impacts/{field}"] for p in points])
+        if new_strobe:
+            strobe[strobe_row:strobe_row + new_strobe] = np.concatenate(
+                [p["strobe"] for p in points])
+        imp_row += new_imp
+        strobe_row += new_strobe
+
+
+def _index(sorted_idx: np.ndarray):
+    """A slice when the sorted indices are contiguous (fast h5py writes), else the array."""
+    first, last = int(sorted_idx[0]), int(sorted_idx[-1])
+    return slice(first, last + 1) if last - first + 1 == sorted_idx.size else sorted_idx
+
+
+def _is_finished(g: h5py.Group) -> bool:
+    """Every point done or failed, and the flat arrays' lengths consistent with them."""
+    return bool(np.all(g["status"][()] != STATUS_PENDING)
+                and int(g.attrs.get("impacts_committed", -1)) == int(g["impact_count"][()].sum())
+                and int(g.attrs.get("strobe_committed", -1)) == int(g["strobe_count"][()].sum()))
+
+
+def _import_unfinished(f: h5py.File, journal: Journal, branches: dict) -> None:
+    """Copy the finished points of an unfinished in-place (version 0.1) file into a journal.
+
+    The flat rows of the points marked done or failed are a prefix of the flat
+    arrays (they were appended in the branch's visiting order), so each point
+    is read back exactly as it was written.
+    """
+    for branch, order in branches.items():
+        g = f[branch]
+        status = g["status"][()]
+        pos = np.empty(len(order), dtype=np.int64)
+        pos[np.asarray(order)] = np.arange(len(order))
+        arrays = {name: g[name][()] for name in (*SCALARS, "final_state",
+                                                  *(("exponents",) if "exponents" in g else ()))}
+        impacts = {name: g["impacts"][name][()] for name in IMPACT_FIELDS}
+        states = g["strobe"]["state"][()]
+        rows = []
+        for i in np.asarray(order)[status[np.asarray(order)] != STATUS_PENDING]:
+            i = int(i)
+            fields = {}
+            for name in arrays:
+                value = arrays[name][i]
+                if name in ("message", "corner_sequence"):
+                    value = np.frombuffer(bytes(value), dtype=np.uint8)
+                fields[name] = value
+            s, c = int(arrays["impact_start"][i]), int(arrays["impact_count"][i])
+            for name in IMPACT_FIELDS:
+                fields[f"impacts/{name}"] = impacts[name][s:s + c]
+            s, c = int(arrays["strobe_start"][i]), int(arrays["strobe_count"][i])
+            fields["strobe"] = states[s:s + c]
+            rows.append((i, int(pos[i]), int(status[i]), int(fields["regime"]),
+                         int(fields["impact_count"]), int(fields["strobe_count"]),
+                         encode_point(fields)))
+        journal.commit(branch, rows, 0.0)
+    journal.conn.execute("UPDATE meta SET value = ? WHERE key = 'wall_s'",
+                         (float(f.attrs.get("wall_s", 0.0)),))
 
 
 # ====================================================================== helpers
@@ -355,123 +682,58 @@ def _attr(value):
 
 
 def _open_readonly(path: Path) -> h5py.File:
-    return _open_for_reading(path)[0]
-
-
-def _open_for_reading(path: Path) -> tuple[h5py.File, bool]:
-    """The store opened read-only, and whether a running sweep holds it (live)."""
+    """A finished (or version 0.1) store opened read-only, checked to be a sweep store."""
     if not path.exists():
         raise SweepStoreError(f"{path}: no such file")
-    live = False
     try:
-        f = h5py.File(path, "r")
+        f = h5py.File(path, "r", locking=False)
     except OSError as exc:
-        if "lock" not in str(exc):
-            raise SweepStoreError(f"{path}: not a readable HDF5 file ({_short(exc)})") from None
-        try:  # a running sweep holds the write lock: read its committed points anyway
-            f = h5py.File(path, "r", locking=False)
-            live = True
-        except OSError as again:
-            raise SweepStoreError(f"{path}: not a readable HDF5 file ({_short(again)})") from None
+        raise SweepStoreError(f"{path}: not a readable HDF5 file ({_short(exc)})") from None
     if _attr(f.attrs.get("format", "")) != FORMAT:
         f.close()
         raise SweepStoreError(f"{path}: not a chaospound sweep store (no format={FORMAT!r})")
     if int(f.attrs.get("format_version", 0)) > FORMAT_VERSION:
         f.close()
         raise SweepStoreError(f"{path}: store format version is newer than this chaospound")
-    return f, live
-
-
-def _open_for_append(path: Path) -> h5py.File:
-    try:
-        return h5py.File(path, "r+")
-    except OSError as exc:
-        hint = "; is a sweep still writing it?" if "lock" in str(exc) else ""
-        raise SweepStoreError(f"{path}: cannot open for writing ({_short(exc)}){hint}") from None
+    return f
 
 
 def _short(exc: Exception) -> str:
-    return str(exc).splitlines()[0][:120]
+    text = str(exc).splitlines()
+    return text[0][:120] if text else type(exc).__name__
 
 
-def _create_layout(f, meta, grid, branches, n_state, n_exponents) -> None:
-    f.attrs["format"] = FORMAT
-    f.attrs["format_version"] = FORMAT_VERSION
-    f.attrs["units"] = json.dumps(UNITS)
-    for key, value in meta.items():
-        f.attrs[key] = value
-    f.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S")
-    f.attrs["wall_s"] = 0.0
-    g = f.create_group("grid")
-    for name, values in grid.items():
-        g.create_dataset(name, data=np.asarray(values, dtype=np.float64))
-    n_points = int(np.prod([len(v) for v in grid.values()]))
-    for name, order in branches.items():
-        b = f.create_group(name)
-        b.attrs["impacts_committed"] = 0
-        b.attrs["strobe_committed"] = 0
-        b.attrs["REGIMES"] = json.dumps(REGIMES)
-        b.create_dataset("order", data=np.asarray(order, dtype=np.int64))
-
-        def per_point(ds_name, dtype, fill, extra=(), group=b):
-            shape = (n_points,) + tuple(extra)
-            group.create_dataset(ds_name, shape=shape, dtype=dtype, fillvalue=fill,
-                                 chunks=(min(n_points, CHUNK),) + tuple(extra),
-                                 compression="gzip", shuffle=True)
-
-        per_point("status", np.int8, STATUS_PENDING)
-        per_point("message", f"S{MESSAGE_LENGTH}", b"")
-        per_point("regime", np.int8, 0)
-        per_point("impacts_per_period", np.int16, -1)
-        per_point("period_cycles", np.int16, -1)
-        per_point("transient_used", np.int32, -1)
-        per_point("corner_sequence", f"S{SEQUENCE_LENGTH}", b"")
-        for ds_name in ("strobe_mismatch", "zero_one", "max_exponent", "max_exponent_error",
-                        "wall_s"):
-            per_point(ds_name, np.float64, np.nan)
-        for ds_name in ("steps", "rejected", "rhs_evals", "impact_start", "impact_count",
-                        "strobe_start", "strobe_count"):
-            per_point(ds_name, np.int64, 0)
-        per_point("final_state", np.float64, np.nan, (n_state,))
-        if n_exponents:
-            per_point("exponents", np.float64, np.nan, (n_exponents,))
-        imp = b.create_group("impacts")
-        for field in IMPACT_FIELDS:
-            dtype = np.int8 if field == "corner" else np.float64
-            imp.create_dataset(field, shape=(0,), maxshape=(None,), dtype=dtype,
-                               chunks=(CHUNK,), compression="gzip", shuffle=True)
-        s = b.create_group("strobe")
-        s.create_dataset("state", shape=(0, n_state), maxshape=(None, n_state),
-                         dtype=np.float64, chunks=(CHUNK // 4, n_state), compression="gzip",
-                         shuffle=True)
-
-
-def _check_same_sweep(f, path, meta, grid, branches) -> None:
-    stored = json.loads(_attr(f.attrs["sweep"]))
-    wanted = json.loads(meta["sweep"])
-    if stored != wanted or _attr(f.attrs["scene"]) != meta["scene"]:
+def _check_same_sweep(stored: dict, path, meta) -> None:
+    try:
+        same = (json.loads(stored["sweep"]) == json.loads(meta["sweep"])
+                and stored["scene"] == meta["scene"])
+    except (KeyError, TypeError, ValueError):
+        same = False
+    if not same:
         raise SweepStoreError(
             f"{path}: holds a different sweep or scene; resume needs the same definition "
             "(use --overwrite to start again)")
 
 
-def _truncate_uncommitted(group) -> None:
-    """Drop flat rows written after the last commit (a run killed mid-batch).
+def _remove_temporaries(path: Path) -> None:
+    """Half-written consolidations and journals of killed sweeps (the lock is held: none is
+    live)."""
+    name = _glob_escape(path.name)
+    for tmp in [*path.parent.glob(f"{name}.tmp-*"), *path.parent.glob(f"{name}.journal.new-*")]:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
 
-    The committed lengths are recomputed from the points marked done or
-    failed (their rows are a prefix of the flat arrays, which are appended in
-    the branch's order), not taken from the length attributes: a run killed
-    between setting the statuses and the attributes leaves them stale.
-    """
-    status = group["status"][:]
-    committed = status != STATUS_PENDING
-    for name, fields, key in (("impact", IMPACT_FIELDS, "impacts_committed"),
-                              ("strobe", ("state",), "strobe_committed")):
-        ends = group[f"{name}_start"][:] + group[f"{name}_count"][:]
-        rows = int(ends[committed].max()) if committed.any() else 0
-        folder = group["impacts" if name == "impact" else "strobe"]
-        for field in fields:
-            ds = folder[field]
-            if ds.shape[0] != rows:
-                ds.resize((rows,) + ds.shape[1:])
-        group.attrs[key] = rows
+
+def _glob_escape(name: str) -> str:
+    return "".join(f"[{c}]" if c in "*?[" else c for c in name)
+
+
+def _fsync_file(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+__all__ += ["PointResult", "sweep_progress"]

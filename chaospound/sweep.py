@@ -34,6 +34,7 @@ import contextlib
 import json
 import math
 import multiprocessing as mp
+import os
 import re
 import signal
 import threading
@@ -198,7 +199,8 @@ class SweepSpec:
 
 @dataclass
 class SweepSummary:
-    """What a sweep did."""
+    """What a sweep did: points computed in this run; regimes and failures of every
+    point stored in the file (a resumed sweep counts the earlier runs' points too)."""
 
     path: str
     points: int
@@ -208,6 +210,9 @@ class SweepSummary:
     wall_s: float
     workers: int
     messages: list[str] = field(default_factory=list)
+    stored: int = 0  #: points in the file, from this and earlier runs
+    finished_before: bool = False  #: resume found the file finished
+
 
     @property
     def points_per_second(self) -> float:
@@ -216,10 +221,14 @@ class SweepSummary:
     def format(self) -> str:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(self.regimes.items())
                            if v and k != "failed")
+        if self.finished_before:
+            return (f"{self.path}: finished already: all {self.points} points are stored, "
+                    f"nothing to resume\nregimes: {counts or 'none'}; failed: {self.failed}")
         lines = [
             f"{self.path}: {self.computed} points computed ({self.points} in the grid) "
             f"in {self.wall_s:.2f} s with {self.workers} worker(s), "
-            f"{self.points_per_second:.1f} points/s",
+            f"{self.points_per_second:.1f} points/s"
+            + ("" if self.stored == self.computed else f"; {self.stored} stored in all"),
             f"regimes: {counts or 'none'}; failed: {self.failed}",
         ]
         lines += [f"  failed: {m}" for m in self.messages[:5]]
@@ -379,8 +388,17 @@ def run_sweep(
         backend.close()
         raise
     try:
-        plan = _Plan(spec, orders, writer, chunk)
-        summary = _execute(plan, backend, writer, progress, str(path))
+        if writer.finished:
+            summary = SweepSummary(path=str(path), points=spec.n_points * len(spec.branches),
+                                   computed=0, regimes={}, failed=0, wall_s=0.0, workers=0,
+                                   finished_before=True)
+        else:
+            plan = _Plan(spec, orders, writer, chunk)
+            summary = _execute(plan, backend, writer, progress, str(path))
+            writer.finish()
+        summary.regimes = writer.regime_counts()
+        summary.stored = sum(summary.regimes.values())
+        summary.failed = summary.regimes.pop("failed", 0)
     finally:
         writer.close()
         backend.close()
@@ -492,22 +510,25 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
     writing = False
 
     def commit() -> None:
+        # a Ctrl-C during a write is held until the write is done: the journal's
+        # transaction is atomic anyway, but the count of committed points stays exact
         nonlocal committed, last_commit, writing
         writing = True
-        for branch in staged:
-            batch, staged[branch] = staged[branch], []
-            writer.write(branch, batch)
-            committed += len(batch)
+        with ctrl_c.held():
+            for branch in staged:
+                batch, staged[branch] = staged[branch], []
+                writer.write(branch, batch)
+                committed += len(batch)
         writing = False
         last_commit = time.monotonic()
 
+    # with worker processes the main thread only waits (in short slices): a Ctrl-C just
+    # sets a flag, so it never lands inside the pool's finalizers; else it raises at once
+    ctrl_c = _CtrlC(raise_at_once=not getattr(backend, "polls", False))
     bar = _progress_bar(plan.total, progress)
     follow_ups: deque[_Task] = deque()  # next segments of running chains go first
     new_tasks = plan.tasks()
     in_flight = {}
-    # with worker processes the main thread only waits (in short slices): a Ctrl-C just
-    # sets a flag, so it never lands inside the pool's finalizers; else it raises at once
-    ctrl_c = _CtrlC(raise_at_once=not getattr(backend, "polls", False))
     try:
         ctrl_c.install()
         while True:
@@ -602,6 +623,16 @@ class _CtrlC:
         if self.pressed:
             raise KeyboardInterrupt
 
+    @contextlib.contextmanager
+    def held(self):
+        """Remember a Ctrl-C inside the block; raise it at the end."""
+        raise_at_once, self.raise_at_once = self.raise_at_once, False
+        try:
+            yield
+        finally:
+            self.raise_at_once = raise_at_once
+        self.check()
+
     def _handle(self, signum, frame) -> None:
         self.pressed = True
         if self.raise_at_once:
@@ -639,7 +670,12 @@ class _LocalBackend:
         if workers > 1:
             ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
             self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                             initializer=_init_worker, initargs=(scene, spec))
+                                             initializer=_init_worker,
+                                             initargs=(scene, spec, os.getpid()))
+            # start the workers now, before the store's files are opened (a forked worker
+            # then holds none of them) and while only the main thread runs
+            for fut in [self._pool.submit(os.getpid) for _ in range(workers)]:
+                fut.result()
 
     def submit(self, task: _Task):
         if self._pool is None:
@@ -696,12 +732,38 @@ def _make_backend(client, workers: int, scene: Scene, spec: SweepSpec):
 _WORKER: dict = {}
 
 
-def _init_worker(scene: Scene, spec: SweepSpec) -> None:
+def _init_worker(scene: Scene, spec: SweepSpec, parent: int) -> None:
     # Ctrl-C at a terminal reaches the whole process group: only the parent handles it
     # (it terminates the workers), so that workers print no tracebacks
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent(parent)
     _WORKER["scene"] = scene
     _WORKER["spec"] = spec
+
+
+def die_with_parent(parent: int) -> None:
+    """Make this worker process end when ``parent`` dies, however it dies; detach stdio.
+
+    Linux's parent-death signal (prctl PR_SET_PDEATHSIG) kills the worker when the
+    process that forked it exits, even by SIGKILL; a parent that died before the
+    call is caught by the check that follows it. The worker's standard streams
+    are pointed at /dev/null, so that it never holds the parent's terminal or
+    pipe (``chaospound sweep ... | tee log`` ends with the sweep); its results and
+    errors travel back through the pool.
+    """
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        pr_set_pdeathsig = 1
+        libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:
+        os._exit(1)
+    with contextlib.suppress(OSError):
+        devnull = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(devnull, fd)
+        os.close(devnull)
 
 
 def _run_in_worker(indices, start_state, continuation):
