@@ -77,7 +77,7 @@ LENGTHS = (30.0, 100.0, 1000.0)  #: l/A_g values of the sensitivity study
 ADAPTIVE_RTOL, ADAPTIVE_ATOL = 1e-8, 1e-10  #: classify()'s solver tolerances (rule 1)
 PHASE_SAMPLES = 400  #: trajectory samples per cycle of the phase diagrams
 LYAPUNOV_CYCLES = 100  #: cycles averaged for each sweep point's exponent
-SIGMAS = 3.0  #: chaotic: lambda > 3 standard errors (MODEL.md 5)
+SIGMAS = 3.0  #: chaotic: lambda > 3 standard errors (docs/model.md 12)
 APERIODIC = ("chaotic", "quasi-periodic", "unresolved")
 REGIME_ORDER = ("none", "periodic", "group-periodic", "quasi-periodic", "chaotic", "unresolved")
 REGIME_COLORS = {**cplot.REGIME_COLORS, "unresolved": "C4", "failed": "k"}
@@ -1017,7 +1017,7 @@ def claims_markdown(c: dict) -> str:
         + ", ".join(f"{a:.3f}-{b:.3f}" for a, b in win["translational_group_periodic_window"]
                     if b > a)
         + " (" + ", ".join(f"{k} x{v}" for k, v in win["translational_group_periodic_labels"]
-                           .items()) + ") under MODEL.md's n > P |",
+                           .items()) + ") under docs/model.md's n > P |",
         f"| most torsional impacts are chaotic | 'most' (scattered velocities in 8 cycles) | "
         f"impacting points without a period in 40 + 8: {pct(tw.get('aperiodic_fraction'))} "
         f"({pct(tw.get('aperiodic_impact_fraction'))} of impacts); lambda_1 > 3 sigma: "
@@ -1257,7 +1257,7 @@ The quick mode (`tests/test_reproduction.py`) takes about 20 s with compiled
 kernels and about 55 s when numba has to compile them first (measured with an
 empty NUMBA_CACHE_DIR: 38 s of it is compilation).
 
-**Settings.** MODEL.md's model (small-rotation Hertz line contact, torsional
+**Settings.** docs/model.md's model (small-rotation Hertz line contact, torsional
 damping with Om_t), presets `fig3a`, `fig3b`, `fig4`, `fig4-translational`,
 `fig5`: T_Ax/T_Bx = 1.5, m = 2.25, all zeta = 0.03, a = 1, beta = 1000,
 chi = 1.5, w/l = 0.55, **l/A_g = 100 (not in the paper)**, start from rest.
@@ -1394,7 +1394,7 @@ statistics barely change.
 1. **Contact model (the reference thesis's 13 contact cases).** The paper
    enumerates corner-to-face and face-to-face configurations (Wang 2008, not
    available) and presumably applies F = beta d^chi at the penetrating corner.
-   chaospound integrates the Hertz law over the overlap (MODEL.md 3): uniform
+   chaospound integrates the Hertz law over the overlap (docs/model.md 6): uniform
    penetration gives beta d^chi, but a corner contact that penetrates over a
    fraction of the face is softer and its torque arm differs. Corner impacts
    are where torsion matters, so this is the first suspect for the factor 3
@@ -1409,7 +1409,7 @@ statistics barely change.
 4. **Classification rule.** The paper's "chaotic" is visual (scattered
    velocities in 8 cycles); chaospound's needs lambda_1 > 3 sigma. The two
    counts differ by a factor of two (table above). "Group-periodic" is
-   MODEL.md's n > P, which also labels two face impacts per cycle with
+   docs/model.md's n > P, which also labels two face impacts per cycle with
    different velocities: the translational model is "group-periodic" over
    {tra_groups} ({tra_group_labels}). The paper says group-periodic impacts
    need torsion: either it counts a group only when the impacts hit different

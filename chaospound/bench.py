@@ -6,7 +6,7 @@
   with located contact events), best of ``repeats`` after a warm-up call;
 * ``scipy-python``: ``scipy.integrate.solve_ivp(method="RK45")`` with
   :func:`python_rhs`, an independent pure-Python transcription of the same
-  equations (MODEL.md sections 2-3);
+  equations (docs/model.md sections 5-6);
 * ``scipy-numba``: ``solve_ivp(method="RK45")`` with the jitted kernel
   :func:`chaospound.kernels.models.rhs` wrapped in a Python function;
 * ``cli``: ``chaospound simulate`` end to end in a subprocess (warm numba
@@ -271,7 +271,7 @@ def format_benchmark(result: dict) -> str:
 def python_rhs(model: int, t: float, y: Sequence[float], p: Sequence[float]) -> list[float]:
     """Right-hand side of the pounding equations in plain Python (no numba).
 
-    An independent transcription of MODEL.md sections 2-3 with the closed-form
+    An independent transcription of docs/model.md sections 5-6 with the closed-form
     line-contact moments of :mod:`chaospound.kernels.contact`, written with
     ``math`` on Python floats, as a scipy user would write it. The benchmark's
     scipy baseline uses it; the tests check it against
@@ -479,7 +479,7 @@ def _table(headers: Sequence[str], rows: Sequence[Sequence[str]], align: str) ->
 
 # ===================================================== pure-Python equations
 def _py_towers(y, p, ug, vg):
-    """12-state towers model (MODEL.md 2-3): two towers, line contact between them."""
+    """12-state towers model (docs/model.md 5-6): two towers, line contact between them."""
     x_a, vx_a, y_a, vy_a, th_a, vth_a, x_b, vx_b, y_b, vy_b, th_b, vth_b = y
     y_c = p[P_Y_C]
     y_ca = y_a + p[TOWER_A + T_EY]  # current CM heights
@@ -534,7 +534,7 @@ def _py_wall(y, p, ug, vg):
 
 
 def _py_tower(p, base, x, vx, yy, vy, th, vth, ug, vg, qx, qy, qth):
-    """One tower's equations of motion (MODEL.md section 2), 6 derivatives."""
+    """One tower's equations of motion (docs/model.md section 5), 6 derivatives."""
     om2 = p[base + T_OM2]
     mu = p[base + T_MU]
     ex = p[base + T_EX]

@@ -10,7 +10,7 @@ is shown or written except by :func:`save`. Figures are made with
 :class:`matplotlib.figure.Figure` directly, never through pyplot, so no
 backend or global state is touched (safe under Agg, in workers, in tests).
 
-Axes carry physical labels in the normalised units of MODEL.md section 1:
+Axes carry physical labels in the normalised units of docs/model.md section 2:
 lengths over A_g, time times omega_Ax, velocities over A_g omega_Ax,
 rotations in radians.
 """

@@ -1,7 +1,7 @@
 """Scenes: the validated, frozen description of one pounding problem.
 
 A :class:`Scene` holds every physical and numerical parameter of a run of
-the two-tower pounding model (MODEL.md sections 1, 3, 4 and 6): two
+the two-tower pounding model (docs/model.md sections 3, 6, 9 and 13): two
 :class:`Tower` objects, the :class:`Excitation`, the Hertz :class:`Contact`,
 the :class:`Solver` settings and the :class:`Run` lengths. Scenes come from
 presets (the paper's figures, ``load_preset``), from TOML files
@@ -11,7 +11,7 @@ line, sweep axes). ``Scene.pack()`` turns a scene into the float64 parameter
 vector laid out in :mod:`chaospound.kernels.params`, and ``Scene.model_id()``
 picks the smallest exact reduction of the equations of motion.
 
-Units are those of MODEL.md: lengths in units of the ground amplitude A_g,
+Units are those of docs/model.md section 2: lengths in units of the ground amplitude A_g,
 time multiplied by omega_Ax (tower A's translational circular frequency).
 
 Every validation failure raises :class:`SceneError` (a ``ValueError``) whose
@@ -94,7 +94,7 @@ __all__ = [
 ]
 
 # ------------------------------------------------------------- defaults
-DEFAULT_LENGTH = 100.0  #: l / A_g (MODEL.md section 6)
+DEFAULT_LENGTH = 100.0  #: l / A_g (docs/model.md section 13)
 DEFAULT_WIDTH_RATIO = 0.55  #: w / l
 DEFAULT_ZETA = 0.03  #: every damping ratio
 DEFAULT_BETA = 1000.0  #: Hertz stiffness
@@ -104,7 +104,7 @@ DEFAULT_FREQ_RATIO = 1.5  #: T_Ax / T_Bx
 DEFAULT_GAP = 1.0  #: a / A_g
 DEFAULT_RTOL = 1e-5  #: chosen by the work-precision study (docs/accuracy.md)
 ATOL_PER_RTOL = 1e-3  #: atol = ATOL_PER_RTOL * rtol unless atol is given
-PAPER_RTOL = 1e-3  #: Press et al.'s Cash-Karp at 0.1 % error (MODEL.md section 6)
+PAPER_RTOL = 1e-3  #: Press et al.'s Cash-Karp at 0.1 % error (docs/model.md section 10)
 
 GROUNDS = ("sine", "none")
 OPPONENTS = ("tower", "wall")
@@ -499,7 +499,7 @@ class Tower:
         return self.gyration if self.gyration is not None else math.sqrt(self.rho2)
 
     def torsion_frequency2(self, om: float) -> float:
-        """Uncoupled torsional frequency squared, Om_t^2 (MODEL.md section 1).
+        """Uncoupled torsional frequency squared, Om_t^2 (docs/model.md section 4).
 
         Parameters
         ----------
@@ -609,7 +609,7 @@ class Solver:
         End steps exactly where a face end's penetration crosses 0.
     model : {"auto", "wall", "tower-wall", "pair", "towers"}
         Reduction of the equations of motion; "auto" picks the smallest
-        exact one (MODEL.md section 4).
+        exact one (docs/model.md section 9).
     """
 
     method: str = "dopri5"
@@ -671,7 +671,7 @@ def _check_fields(obj: object, specs: Mapping[str, _Spec], skip: Sequence[str] =
 # ================================================================= scene
 @dataclass(frozen=True)
 class Scene:
-    """A complete, validated pounding problem (MODEL.md sections 1-4).
+    """A complete, validated pounding problem (docs/model.md sections 3-9).
 
     Parameters
     ----------
@@ -763,7 +763,7 @@ class Scene:
         -------
         int
             ``solver.model`` if forced, else the smallest exact reduction
-            (MODEL.md section 4).
+            (docs/model.md section 9).
         """
         if self.solver.model == "auto":
             return self._auto_model_id()
@@ -988,7 +988,7 @@ class Scene:
             )
 
     def _auto_model_id(self) -> int:
-        """Smallest exact reduction (MODEL.md section 4)."""
+        """Smallest exact reduction (docs/model.md section 9)."""
         if self.opponent == "wall":
             return TOWER_WALL if self._torsion_reasons(("A",)) else WALL
         return TOWERS if self._torsion_reasons(("A", "B")) else PAIR

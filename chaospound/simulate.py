@@ -1,7 +1,7 @@
 """Steady-state runs: transient, record window, impacts, stroboscopic section.
 
 The driver packs a :class:`~chaospound.scene.Scene`, picks the smallest exact
-model (MODEL.md section 4), runs the jitted cycle integrator
+model (docs/model.md section 9), runs the jitted cycle integrator
 (:func:`chaospound.kernels.integrate.run_cycles`) and returns plain arrays in
 dataclasses. Nothing here knows about files, plots or the command line.
 """

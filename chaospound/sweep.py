@@ -111,7 +111,7 @@ class SweepSpec:
         "window": the regime from the point's own record window (the scene's
         transient and record cycles, e.g. the paper's 40 + 8), with the
         stroboscopic tolerance ``window_tol``: what such a window can resolve
-        (MODEL.md 5: 1-2 % of the transient is left after 40 cycles). Aperiodic
+        (docs/model.md 11: 1-2 % of the transient is left after 40 cycles). Aperiodic
         points are chaotic or quasi-periodic only with exponents (``lyapunov``),
         else "unresolved". "full": the adaptive classifier
         (:func:`chaospound.dynamics.classify.classify`) per point: its own

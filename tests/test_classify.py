@@ -157,7 +157,7 @@ def test_no_impacts_is_none_with_the_period_of_the_motion():
     [(0.09, 0.01, "chaotic"), (0.01, 0.01, "unresolved"), (-0.05, 0.005, "unresolved")],
 )
 def test_exponent_rule_without_the_01_test(exponent, error, expected):
-    """MODEL.md 5: chaotic beyond 3 standard errors; without a 0-1 test an exponent
+    """docs/model.md 12: chaotic beyond 3 standard errors; without a 0-1 test an exponent
     merely consistent with 0 cannot tell weak chaos from quasi-periodicity (unresolved);
     < 0 without a period is unresolved."""
     x = logistic(101)
@@ -233,7 +233,7 @@ def test_group_periodicity_does_not_depend_on_the_section_phase():
 
 def test_fig4_periodic_and_impact_free_points():
     """T/T_Ax = 1.3 pounds once per cycle; at 1.5 the steady response is periodic but
-    never touches (relative amplitude 0.55 < gap): MODEL.md 5 calls it 'none'."""
+    never touches (relative amplitude 0.55 < gap): docs/model.md 12 calls it 'none'."""
     pounding = classify(load_preset("fig4").with_params(period_ratio=1.3))
     assert pounding.label == "periodic 1-1"
     free = classify(load_preset("fig4").with_params(period_ratio=1.5))

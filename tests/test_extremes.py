@@ -7,7 +7,7 @@ fig4-translational (pair), tower-wall and wall. Every steady run (40 + 8
 cycles) must either
 
 * return finite sections, final state and impact records that are
-  consistent with MODEL.md section 3 (onset states on the contact surface
+  consistent with docs/model.md section 8 (onset states on the contact surface
   with an end moving in, positive durations, non-negative peak penetrations
   and forces, episodes that do not overlap, impact times inside the record
   window with their phase and cycle), or

@@ -40,7 +40,7 @@ def test_two_trajectory_method_on_ueda():
 
 @pytest.mark.parametrize("scene", [PERIODIC_FIG4, CHAOTIC_FIG4], ids=["periodic", "chaotic"])
 def test_sum_of_exponents_equals_mean_trace_towers(scene):
-    """MODEL.md 5: sum of all 12 exponents = -2(zx_A + zy_A + zt_A Om_tA) - ... ."""
+    """docs/model.md 12: sum of all 12 exponents = -2(zx_A + zy_A + zt_A Om_tA) - ... ."""
     spec = lyapunov_spectrum(scene, cycles=60, tangent_transient=5)
     assert spec.exponents.shape == (12,)
     d = scene.to_dict()

@@ -114,7 +114,7 @@ def test_jacobian_matches_finite_differences(model, chi):
 
 @pytest.mark.parametrize("model", [TOWERS, PAIR, TOWER_WALL, WALL])
 def test_trace_is_state_independent(model):
-    """MODEL.md section 5: the Jacobian's trace is a constant of the damping."""
+    """docs/model.md section 12: the Jacobian's trace is a constant of the damping."""
     p = SCENES[model].pack(model)
     n = MODEL_DIMS[model]
     rng = np.random.default_rng(3)

@@ -111,7 +111,7 @@ def test_adaptive_classification_at_known_points(quick):
     assert rows[1.5]["regime"] == "none"
     translational = {round(float(r["period_ratio"]), 3): r for r in
                      read_csv(quick / "adaptive_translational.csv")}
-    # two face impacts per cycle with different velocities: n > P under MODEL.md's rule
+    # two face impacts per cycle with different velocities: n > P under docs/model.md's rule
     assert translational[0.9]["label"] == "group-periodic 2-1"
     assert translational[0.9]["corner_sequence"] == "face face"
 

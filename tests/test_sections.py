@@ -1,4 +1,4 @@
-"""Poincare sections and the impact map (MODEL.md section 5).
+"""Poincare sections and the impact map (docs/model.md section 11).
 
 Every test compares a section against an independent route to the same
 points: the simulator's own stroboscopic record, the dense trajectory of

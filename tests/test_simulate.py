@@ -1,4 +1,4 @@
-"""Physics of the event-aware simulator (MODEL.md sections 2-5).
+"""Physics of the event-aware simulator (docs/model.md sections 5-12).
 
 Every test compares a run against an invariant or an independent result:
 energy conservation, the exact reductions, the mirror symmetry, a fine
@@ -116,7 +116,7 @@ def contact_free_max_approach(scene, amplitude):
     return approach(0.5 * (lo + hi))
 
 
-# ============================================== 1. energy (MODEL.md section 2)
+# ========================================= 1. energy (docs/model.md section 7)
 ENERGY_CASES = [
     # preset, initial state (12 entries), cycles; the scene picks the model
     ("fig3a", [0, 2, 0.5, 0.1, 0.01, -0.005, 0, -2, -0.3, 0.2, -0.01, 0.003], 200, "towers"),
@@ -147,7 +147,7 @@ def test_energy_is_conserved_without_damping_and_ground_motion(preset, initial, 
     assert drift <= 1e-6, f"relative energy drift {drift:.2e}"  # measured 5e-9 .. 1.3e-7
 
 
-# ============================================ 2. reductions (MODEL.md section 4)
+# ======================================= 2. reductions (docs/model.md section 9)
 @pytest.mark.parametrize(
     ("preset", "flat", "model"),
     [
@@ -252,7 +252,7 @@ def test_mirror_symmetry_of_a_general_asymmetric_scene():
     _assert_mirror(a, b, 1e-9)
 
 
-# ====================================== 4. grazing contacts (MODEL.md section 3)
+# ================================= 4. grazing contacts (docs/model.md section 8)
 GRAZE_PRESETS = ("wall", "tower-wall", "fig3a")
 GRAZE_DEPTHS = (2e-6, 1e-5, 1e-4, 1e-3)
 GRAZE_CYCLES = 3
@@ -339,7 +339,7 @@ def test_graze_peak_penetration_is_located(preset, depth, method, rtol):
         np.testing.assert_allclose(pen, fine.impacts.peak_penetration, rtol=0.2)
 
 
-# ================================== 5. located events (MODEL.md sections 3, 5)
+# ============================ 5. located events (docs/model.md sections 8, 10)
 EVENT_SCENES = [
     ("fig3a", {}),
     ("fig5", {}),
@@ -487,7 +487,7 @@ def _d_max_series(scene, times, states):
 @pytest.mark.parametrize("samples", [0, EVENT_SAMPLES], ids=["no-samples", "samples"])
 @pytest.mark.parametrize(("preset", "flat"), EVENT_SCENES[:5], ids=_event_ids()[:5])
 def test_peak_penetration_is_the_episode_maximum(preset, flat, samples):
-    """max of d_max over the episode (MODEL.md 3), whether or not samples are stored."""
+    """max of d_max over the episode (docs/model.md 8), whether or not samples are stored."""
     imp, rows, reference = _episode_maxima(preset, flat, samples, _d_max_series)
     error = np.max(np.abs(imp.peak_penetration[rows] / reference - 1.0))
     assert error < 1e-6, f"peak penetration off by {error:.2e} (relative)"  # samples: 3e-9
@@ -496,7 +496,7 @@ def test_peak_penetration_is_the_episode_maximum(preset, flat, samples):
 @pytest.mark.parametrize("samples", [0, EVENT_SAMPLES], ids=["no-samples", "samples"])
 @pytest.mark.parametrize(("preset", "flat"), EVENT_SCENES[:5], ids=_event_ids()[:5])
 def test_peak_force_is_the_episode_maximum(preset, flat, samples):
-    """max over the episode of the force on A along -x, -Q_XA (MODEL.md 3)."""
+    """max over the episode of the force on A along -x, -Q_XA (docs/model.md 8)."""
     imp, rows, reference = _episode_maxima(preset, flat, samples, force_series)
     error = np.max(np.abs(imp.peak_force[rows] / reference - 1.0))
     assert error < 1e-6, f"peak force off by {error:.2e} (relative)"
@@ -587,7 +587,7 @@ def test_integrators_agree_on_a_pounding_scene(name):
     np.testing.assert_allclose(sim.strobe.state, ref.strobe.state, rtol=0, atol=1e-7)
 
 
-# ================================== 8. landing steps on the kinks (MODEL.md 3)
+# ============================ 8. landing steps on the kinks (docs/model.md 10)
 @pytest.mark.parametrize("method", ["dopri5", "dop853", "cash-karp"])
 def test_restarting_at_kinks_reduces_impact_velocity_errors(method):
     rtol = 1e-9

@@ -1,4 +1,4 @@
-"""Regime classification of a steady pounding response (MODEL.md section 5).
+"""Regime classification of a steady pounding response (docs/model.md section 12).
 
 A response is one of
 
@@ -21,7 +21,7 @@ The rules, in the order :func:`classify` applies them (the same text is in
    ``tol = 1e3 rtol_used`` (1e-5), relative to the state scale. Converged
    impacting orbits repeat to 2e-8 .. 4e-7 at this setting, a margin of 25
    or more below tol, while the 1 % residue of a 3 %-damped transient after
-   40 cycles (MODEL.md 5) is 1000 times above it. Fixed-step rk4 has no rtol:
+   40 cycles (docs/model.md 11) is 1000 times above it. Fixed-step rk4 has no rtol:
    tol = 1e-5 and its ``steps_per_cycle`` must be fine enough.
 2. State scale. Rotations and their rates are multiplied by the tower's
    radius of gyration rho, so that every component is a length (A_g) or a
@@ -52,7 +52,7 @@ The rules, in the order :func:`classify` applies them (the same text is in
    (:func:`~chaospound.dynamics.lyapunov.lyapunov_spectrum`, k = 1,
    ``lyapunov_cycles`` cycles from the last section, 20 cycles of tangent
    alignment, error of 10 block means). Chaotic when lambda > 3 sigma
-   (MODEL.md's default rule) and K >= 0.2 (K < 0.2 clearly contradicts);
+   (docs/model.md 12's rule) and K >= 0.2 (K < 0.2 clearly contradicts);
    quasi-periodic when |lambda| <= 3 sigma and K < 0.2 (an exponent that is
    merely consistent with zero is not enough on its own); unresolved
    otherwise, in particular lambda < -3 sigma without a period (a period

@@ -1,4 +1,4 @@
-"""The impact map (MODEL.md section 5).
+"""The impact map (docs/model.md section 11).
 
 The sequence of impacts of a run, (phase_n, V_n, corner_n), and the map
 n -> n+1 between consecutive impacts: the pairs (phase_n, phase_{n+1}),

@@ -1,4 +1,4 @@
-"""Lyapunov exponents with error bars (MODEL.md section 5).
+"""Lyapunov exponents with error bars (docs/model.md section 12).
 
 Two independent methods:
 

@@ -1,4 +1,4 @@
-"""Poincare sections: stroboscopic and impact sections (MODEL.md section 5).
+"""Poincare sections: stroboscopic and impact sections (docs/model.md section 11).
 
 * :func:`stroboscopic_section`: the state at t = (phase + k) T for
   k = transient .. transient + cycles (cycles + 1 states), T the excitation

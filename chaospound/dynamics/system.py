@@ -88,7 +88,7 @@ class System:
 
     @classmethod
     def from_scene(cls, scene: Scene) -> System:
-        """The smallest exact model of a pounding scene (MODEL.md section 4)."""
+        """The smallest exact model of a pounding scene (docs/model.md section 9)."""
         model_id = scene.model_id()
         solver = scene.solver
         return cls(

@@ -1,4 +1,4 @@
-"""Hertz line contact in closed, numerically stable form (MODEL.md section 3).
+"""Hertz line contact in closed, numerically stable form (docs/model.md section 6).
 
 The penetration along the contact line is linear in y, ``d(y) = d_c + c_1 (y - y_c)``,
 over the rest overlap ``[y_c - L/2, y_c + L/2]``. With ``s = (y - y_lo) / L`` in

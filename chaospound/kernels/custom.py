@@ -1,6 +1,6 @@
 """The cycle integrator specialised to a user's own jitted system.
 
-A user system supplies three numba-jitted functions (MODEL.md section 5 does
+A user system supplies three numba-jitted functions (docs/model.md section 12 does
 not care which oscillator it integrates)::
 
     rhs(t, y, q, out)       # out[:] = dy/dt

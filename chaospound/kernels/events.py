@@ -1,4 +1,4 @@
-"""Contact events located on the dense output of a step (MODEL.md section 3).
+"""Contact events located on the dense output of a step (docs/model.md section 8).
 
 The event functions are the penetrations at the two ends of the contact line,
 ``d_lo(t)`` and ``d_hi(t)``; their sign changes are the force's kinks (contact

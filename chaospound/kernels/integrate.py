@@ -1,4 +1,4 @@
-"""Cycle-by-cycle integration with located contact events (MODEL.md sections 3, 5).
+"""Cycle-by-cycle integration with located contact events (docs/model.md sections 8, 10).
 
 Time is kept as (cycle index k, local time tau): ``t = t0 + k T + tau`` with
 ``t0`` the stroboscopic section's time origin and ``tau`` reset to exactly 0
@@ -639,7 +639,7 @@ def _record_onset(model, p, t_force, k, period, t0, state, imp, imp_state, row, 
 
 @kernel
 def _corner_label(model, p, s, plus_end):
-    """Whose corner is the inner one at the + (y_hi) or - (y_lo) end (MODEL.md 3)."""
+    """Whose corner is the inner one at the + (y_hi) or - (y_lo) end (docs/model.md 8)."""
     if model == TOWER_WALL:
         return CORNER_A_PLUS if plus_end else CORNER_A_MINUS
     a = TOWER_A

@@ -1,6 +1,6 @@
 """Right-hand sides, Jacobians and contact geometry of the four pounding models.
 
-MODEL.md sections 2-4. Every function dispatches on the integer model id of
+docs/model.md sections 5-9. Every function dispatches on the integer model id of
 :mod:`chaospound.kernels.params` (WALL, TOWER_WALL, PAIR, TOWERS); state
 layouts:
 
@@ -13,7 +13,7 @@ layouts:
 keep ``t`` reduced to within one excitation period of the section origin so
 that the phase never drifts (see :mod:`chaospound.kernels.integrate`).
 
-Generalised contact forces ``Q = -dV/dq`` of the line contact (MODEL.md 3),
+Generalised contact forces ``Q = -dV/dq`` of the line contact (docs/model.md 6),
 with ``I0 = (beta/L) int d+^chi dy`` and ``F1 = (beta/L) int d+^chi (y - y_c) dy``::
 
     Q_XA = -I0,          Q_XB = +I0
@@ -63,11 +63,11 @@ from .tangent import apply_jvp, linearize
 
 @kernel
 def rhs(model, t, y, p, out):
-    """Time derivative of the state (MODEL.md section 2), into ``out``.
+    """Time derivative of the state (docs/model.md section 5), into ``out``.
 
     Model ids ``TANGENT + base`` integrate the state of ``base`` together with
     k tangent vectors stored after it (``y`` of length n (1 + k)): the
-    variational equations ``V' = J V`` of MODEL.md section 5.
+    variational equations ``V' = J V`` of docs/model.md section 12.
     """
     ug, vg = ground(t, p)
     rhs_grounded(model, t, y, p, ug, vg, out)
@@ -146,7 +146,7 @@ def contact_ends(model, t, y, p, out):
 
     Writes ``out[0] = d_lo``, ``out[1] = d_hi``, ``out[2] = d d_lo/dt``,
     ``out[3] = d d_hi/dt`` (rates at fixed y: the relative velocity of the
-    material points, MODEL.md section 3). For the translational models both
+    material points, docs/model.md section 8). For the translational models both
     ends carry the single penetration d; the reference systems have no
     contact: (-1, -1, 0, 0).
     """
@@ -206,7 +206,7 @@ def penetration_rate(model, t, y, p, y_at):
 
 @kernel
 def contact_potential(model, t, y, p):
-    """Contact potential V (MODEL.md section 3), units of A_g^2 k_Ax."""
+    """Contact potential V_c (docs/model.md section 6), units of A_g^2 k_Ax."""
     model = base_model(model)
     if model == LORENZ or model == DUFFING:
         return 0.0
@@ -280,7 +280,7 @@ def contact_force_rate(model, t, y, p, ends):
 
 @kernel
 def energy(model, y, p):
-    """Total mechanical energy (MODEL.md section 2), ground motion "none".
+    """Total mechanical energy (docs/model.md section 7), ground motion "none".
 
     ``E = sum_i (1/mu_i) [(X'^2 + Y'^2 + rho^2 th'^2)/2 + Om^2 (X^2 + Y^2
     + 2 e_y X th - 2 e_x Y th)/2 + rho^2 Om_t^2 th^2 / 2] + V``.
@@ -301,7 +301,7 @@ def energy(model, y, p):
 
 @kernel
 def jacobian_trace(model, p):
-    """Constant trace of the Jacobian (MODEL.md section 5): sum of all exponents."""
+    """Constant trace of the Jacobian (docs/model.md section 12): sum of all exponents."""
     model = base_model(model)
     if model == LORENZ:
         return -p[REF_0] - 1.0 - p[REF_2]
@@ -363,7 +363,7 @@ def _tower_wall_forces(y, p, ug, q):
 
 @inline
 def _tower_accel(p, base, x, vx, yy, vy, th, vth, ug, vg, qx, qy, qth, out, off):
-    """Equations of motion of one tower (MODEL.md section 2) into out[off:off+6]."""
+    """Equations of motion of one tower (docs/model.md section 5) into out[off:off+6]."""
     om2 = p[base + T_OM2]
     mu = p[base + T_MU]
     ex = p[base + T_EX]

@@ -3,7 +3,7 @@
 A :class:`chaospound.scene.Scene` is packed (``Scene.pack()``) into one float64
 vector ``p`` of length :data:`N_PARAMS` plus an integer model id. Kernels read
 ``p`` through the index constants below and never see names or objects.
-Every quantity is dimensionless (MODEL.md section 1): lengths in A_g, time
+Every quantity is dimensionless (docs/model.md section 2): lengths in A_g, time
 multiplied by omega_Ax.
 
 Derived quantities (products such as ``2 zeta Om``) are precomputed by the

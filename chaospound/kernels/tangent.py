@@ -1,4 +1,4 @@
-"""Linearised dynamics: Jacobian-vector products of every model (MODEL.md section 5).
+"""Linearised dynamics: Jacobian-vector products of every model (docs/model.md section 12).
 
 The variational equations ``V' = J(t, y) V`` need ``J v`` for several tangent
 vectors per right-hand-side call. :func:`linearize` computes, once per call,
@@ -150,7 +150,7 @@ def apply_jvp(model, p, lin, v, out):
 
 @kernel
 def _structural_jvp(p, base, v, out, off):
-    """Contact-free part of one tower's block of ``J v`` (MODEL.md section 2)."""
+    """Contact-free part of one tower's block of ``J v`` (docs/model.md section 5)."""
     om2 = p[base + T_OM2]
     ex = p[base + T_EX]
     ey = p[base + T_EY]
