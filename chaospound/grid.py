@@ -174,15 +174,22 @@ def _range(shown: str, start: float, stop: float, step: float) -> np.ndarray:
     steps = (stop - start) / step  # >= 0; inf if stop - start overflows or step is tiny
     if math.isinf(stop - start):  # |stop - start| > 1.8e308: divide first
         steps = stop / step - start / step
-    if not steps < MAX_POINTS:  # also inf: no floor(inf)
+    if not steps < 1e15:  # also inf: no floor(inf); below, the count is exact
         many = f"about {steps + 1:.3g}" if math.isfinite(steps) else "too many"
         raise ValueError(f"{shown}: {many} points (step {step:g} from {start:g} to "
                          f"{stop:g}), more than {MAX_POINTS}")
     count = math.floor(steps + 1e-9) + 1
     if count > MAX_POINTS:
         raise ValueError(f"{shown}: {count} points, more than {MAX_POINTS}")
-    with np.errstate(over="ignore"):  # an overflow is reported by grid_values
-        return start + step * np.arange(count)
+    k = np.arange(count)
+    with np.errstate(over="ignore"):
+        values = start + step * k
+        if not np.all(np.isfinite(values)):
+            # step * k may overflow while start + step * k does not (-1e308:1e308:1e308):
+            # halving is exact for these normal numbers; a real overflow stays inf and is
+            # reported by grid_values
+            values = 2.0 * (0.5 * start + (0.5 * step) * k)
+    return values
 
 
 def _list(shown: str, grid: str) -> np.ndarray:
@@ -236,7 +243,11 @@ def check_axis(scene: Scene, axis: Axis) -> None:
     """
     bad = _first_invalid(scene, axis.name, axis.values)
     if bad is not None:
-        raise ValueError(f"sweep {axis.name}={shorten(axis.spec)}: {bad[1]}") from None
+        value, exc = bad
+        problem = str(exc)
+        if not problem.startswith(f"{axis.name} = "):  # e.g. the overlap: name the value
+            problem = f"at {axis.name} = {value!r}: {problem}"
+        raise ValueError(f"sweep {axis.name}={shorten(axis.spec)}: {problem}") from None
 
 
 def _first_invalid(scene: Scene, name: str, values: np.ndarray,
