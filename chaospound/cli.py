@@ -924,7 +924,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.params:
         axes = parse_axes(args.params, scene)
     elif scene.sweep:
-        axes = axes_from_scene(scene)
+        try:
+            axes = axes_from_scene(scene)
+        except ValueError as exc:  # name where the grid came from
+            source = f"preset {args.preset}" if args.preset else _path(args.scene_file)
+            raise CliError(f"{source}: [sweep] {exc}") from None
     else:
         raise CliError(
             "nothing to sweep: give --param NAME=GRID (scene "
