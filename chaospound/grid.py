@@ -266,10 +266,11 @@ def _candidates(values: np.ndarray, exhaustive: int) -> list[float]:
     """The values whose check covers every value of ``values`` (see check_axis)."""
     if values.size <= exhaustive:
         return list(dict.fromkeys(values.tolist()))  # distinct, in grid order
-    fractional = np.flatnonzero(values != np.floor(values))
+    fractional = values != np.floor(values)
+    first = int(np.argmax(fractional))  # the first True, or 0 if there is none
     tried = [float(values.min()), float(values.max())]
-    if fractional.size:
-        tried.append(float(values[fractional[0]]))
+    if fractional[first]:
+        tried.append(float(values[first]))
     return tried
 
 
