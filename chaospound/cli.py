@@ -34,6 +34,8 @@ import tempfile
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, NoReturn
 
+from chaospound.messages import QUOTE_LIMIT, shorten
+
 if TYPE_CHECKING:
     from chaospound.scene import Scene
     from chaospound.simulate import Simulation
@@ -56,6 +58,12 @@ EXIT_OK = 0
 EXIT_FAILURE = 1  #: a numerical failure (SimulationError)
 EXIT_USAGE = 2  #: bad input: usage, scene, files
 EXIT_INTERRUPTED = 130  #: Ctrl-C (128 + SIGINT)
+#: most characters of a file name quoted in a message: more than any real path
+#: (PATH_MAX is 4096 bytes, real ones are far shorter), less than a pasted screenful
+PATH_LIMIT = 1024
+#: longest error line: a last resort, the user's values are already cut short where
+#: they are quoted (chaospound.messages.shorten)
+MESSAGE_LIMIT = 2000
 EXIT_BROKEN_PIPE = 141  #: stdout closed early (128 + SIGPIPE), e.g. ``| head``
 
 #: run and solver options applied as scene overrides (option dest = flat parameter name)
@@ -194,11 +202,11 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
 
     preset, path = args.preset, args.scene_file
     if preset is not None and path is not None:
-        raise CliError(f"give --preset {preset} or the scene file {path!r}, not both")
+        raise CliError(f"give --preset {shorten(preset)} or the scene file {_path(path)}, not both")
     if preset is None and path is None:
         raise CliError("no scene: give --preset NAME or a scene file (see 'chaospound presets')")
     if path is not None and not os.path.exists(path):
-        raise CliError(f"scene file {path!r} not found")
+        raise CliError(f"scene file {_path(path)} not found")
     scene = load_preset(preset) if preset is not None else load_scene(path)
     overrides = [
         f"{name}={getattr(args, name)}"
@@ -229,7 +237,7 @@ def write_json_file(document: object, path: str, *, overwrite: bool = False) -> 
             "w", encoding="utf-8", dir=folder, prefix=".chaospound-", suffix=".tmp", delete=False
         )
     except OSError as exc:
-        raise CliError(f"cannot write {path!r}: {exc.strerror or exc}") from None
+        raise CliError(f"cannot write {_path(path)}: {exc.strerror or exc}") from None
     try:
         with handle:
             handle.write(text)
@@ -238,7 +246,7 @@ def write_json_file(document: object, path: str, *, overwrite: bool = False) -> 
     except BaseException as exc:
         os.unlink(handle.name)
         if isinstance(exc, OSError):
-            raise CliError(f"cannot write {path!r}: {exc.strerror or exc}") from None
+            raise CliError(f"cannot write {_path(path)}: {exc.strerror or exc}") from None
         raise
 
 
@@ -246,11 +254,11 @@ def check_output_path(path: str, *, overwrite: bool) -> None:
     """Raise :class:`CliError` unless ``path`` can be written (before any work)."""
     folder = os.path.dirname(os.path.abspath(path))
     if os.path.isdir(path):
-        raise CliError(f"output {path!r} is a directory")
+        raise CliError(f"output {_path(path)} is a directory")
     if os.path.exists(path) and not overwrite:
-        raise CliError(f"output {path!r} exists (use --overwrite to replace it)")
+        raise CliError(f"output {_path(path)} exists (use --overwrite to replace it)")
     if not os.path.isdir(folder):
-        raise CliError(f"output {path!r}: folder {folder!r} does not exist")
+        raise CliError(f"output {_path(path)}: folder {_path(folder)} does not exist")
 
 
 # ============================================================== presets
@@ -297,7 +305,8 @@ def _cmd_params(args: argparse.Namespace) -> int:
     described = parameter_help()
     for name in args.names:
         if name not in described:
-            raise CliError(f"unknown parameter {name!r} (see 'chaospound params')")
+            raise CliError(f"unknown parameter {shorten(name, quote=True)} "
+                           "(see 'chaospound params')")
     names = args.names or list(described)
     _emit(_table(("parameter", "meaning"), [(n, described[n]) for n in names], "ll"))
     return EXIT_OK
@@ -571,7 +580,7 @@ def _lyapunov_save_plot(spectrum, two, path: str, *, overwrite: bool) -> None:
     try:
         save(fig, path)
     except OSError as exc:
-        raise CliError(f"cannot write {path!r}: {exc.strerror or exc}") from None
+        raise CliError(f"cannot write {_path(path)}: {exc.strerror or exc}") from None
 
 
 def _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall) -> dict:
@@ -771,7 +780,7 @@ def _classify_save_plot(scene: Scene, regime, path: str, *, overwrite: bool) -> 
     try:
         save(fig, path)
     except OSError as exc:
-        raise CliError(f"cannot write {path!r}: {exc.strerror or exc}") from None
+        raise CliError(f"cannot write {_path(path)}: {exc.strerror or exc}") from None
 
 
 def _classify_report(scene: Scene, regime, plot: str | None) -> str:
@@ -916,11 +925,15 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.params:
         axes = parse_axes(args.params, scene)
     elif scene.sweep:
-        axes = axes_from_scene(scene)
+        try:
+            axes = axes_from_scene(scene)
+        except ValueError as exc:  # name where the grid came from
+            source = f"preset {args.preset}" if args.preset else _path(args.scene_file)
+            raise CliError(f"{source}: [sweep] {exc}") from None
     else:
         raise CliError(
-            f"nothing to sweep: give --param NAME=GRID (scene {scene.name!r} has no "
-            "[sweep] table)"
+            "nothing to sweep: give --param NAME=GRID (scene "
+            f"{shorten(scene.name, quote=True)} has no [sweep] table)"
         )
     spec = SweepSpec(
         tuple(axes),
@@ -959,7 +972,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     except StoreWriteError as exc:  # full disk, I/O error: committed points are kept
         return _fail(str(exc), EXIT_FAILURE)
     except OSError as exc:
-        raise CliError(f"cannot write {args.output!r}: {exc.strerror or exc}") from None
+        raise CliError(f"cannot write {_path(args.output)}: {exc.strerror or exc}") from None
     finally:
         if client is not None:
             disconnect(client, cluster)
@@ -976,7 +989,8 @@ def _exponent_count(text: str) -> int:
     except ValueError:
         value = 0
     if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be an integer >= 1 or 'all'")
+        raise argparse.ArgumentTypeError(
+            f"{shorten(text, quote=True)}: must be an integer >= 1 or 'all'")
     return value
 
 
@@ -985,22 +999,22 @@ def _check_sweep_output(path: str, *, resume: bool, overwrite: bool) -> None:
     file without --resume or --overwrite (run_sweep checks a file to resume, read-only)."""
     folder = os.path.dirname(os.path.abspath(path))
     if os.path.isdir(path):
-        raise CliError(f"output {path!r} is a directory")
+        raise CliError(f"output {_path(path)} is a directory")
     if not os.path.isdir(folder):
-        raise CliError(f"output {path!r}: folder {folder!r} does not exist")
+        raise CliError(f"output {_path(path)}: folder {_path(folder)} does not exist")
     from chaospound.lock import holder
 
     running = holder(path)
     if running is not None:
-        raise CliError(f"output {path!r}: a running sweep ({running}) is writing it; wait for "
+        raise CliError(f"output {_path(path)}: a running sweep ({running}) is writing it; wait for "
                        "it to finish or stop it first")
     if resume or overwrite:
         return
     if os.path.exists(path + ".journal"):
-        raise CliError(f"output {path!r}: an interrupted sweep's journal exists (use --resume "
+        raise CliError(f"output {_path(path)}: an interrupted sweep's journal exists (use --resume "
                        "to finish it or --overwrite to replace it)")
     if os.path.exists(path):
-        raise CliError(f"output {path!r} exists (use --resume to finish it or --overwrite "
+        raise CliError(f"output {_path(path)} exists (use --resume to finish it or --overwrite "
                        "to replace it)")
 
 
@@ -1034,7 +1048,7 @@ def _cmd_plot(args: argparse.Namespace) -> int:
         raise CliError(f"--branch {args.branch}: the file has {', '.join(sweep.branches)}")
     output = args.output or os.path.splitext(args.sweep_file)[0] + ".png"
     if os.path.abspath(output) == os.path.abspath(args.sweep_file):
-        raise CliError(f"output {output!r} is the sweep file itself")
+        raise CliError(f"output {_path(output)} is the sweep file itself")
     check_output_path(output, overwrite=args.overwrite)
     branches = [args.branch] if args.branch is not None else list(sweep.branches)
     fig = _sweep_figure(sweep, branches)
@@ -1042,7 +1056,7 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     try:
         save(fig, output)
     except OSError as exc:
-        raise CliError(f"cannot write {output!r}: {exc.strerror or exc}") from None
+        raise CliError(f"cannot write {_path(output)}: {exc.strerror or exc}") from None
     kind = "bifurcation diagram" if len(sweep.parameters) == 1 else "regime map"
     _emit(f"wrote {output}: {kind} of {' x '.join(sweep.parameters)}, "
           f"branch {', '.join(branches)}")
@@ -1156,7 +1170,7 @@ class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are exceptions, so :func:`main` returns codes."""
 
     def error(self, message: str) -> NoReturn:
-        raise CliError(message)
+        raise CliError(_shorten_words(message))
 
     def exit(self, status: int = 0, message: str | None = None) -> NoReturn:
         if message:
@@ -1171,7 +1185,7 @@ def _count(text: str) -> int:
     except ValueError:
         value = -1
     if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be an integer >= 0")
+        raise argparse.ArgumentTypeError(f"{shorten(text, quote=True)}: must be an integer >= 0")
     return value
 
 
@@ -1181,9 +1195,27 @@ def _is_simulation_error(exc: BaseException) -> bool:
     return module is not None and isinstance(exc, module.SimulationError)
 
 
+def _shorten_words(message: str) -> str:
+    """argparse's message with every long word (an argument it quotes whole) cut short."""
+    words = []
+    for word in message.split(" "):
+        if len(word) > QUOTE_LIMIT and word[0] == word[-1] and word[0] in "'\"":
+            word = shorten(word[1:-1], quote=True)
+        elif len(word) > QUOTE_LIMIT:
+            word = shorten(word)
+        words.append(word)
+    return " ".join(words)
+
+
+def _path(path: object) -> str:
+    """A file name as quoted in a message (whole unless absurdly long)."""
+    return shorten(path, PATH_LIMIT, quote=True)
+
+
 def _fail(message: str, code: int) -> int:
     """Report one line on stderr and return ``code``."""
-    sys.stderr.write(f"{PROG}: error: {' '.join(message.split())}\n")
+    message = shorten(" ".join(message.split()), MESSAGE_LIMIT)
+    sys.stderr.write(f"{PROG}: error: {message}\n")
     sys.stderr.flush()
     return code
 

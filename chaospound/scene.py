@@ -65,6 +65,7 @@ from chaospound.kernels.params import (
     TOWERS,
     WALL,
 )
+from chaospound.messages import shorten
 
 if TYPE_CHECKING:
     from importlib.abc import Traversable
@@ -105,6 +106,9 @@ DEFAULT_GAP = 1.0  #: a / A_g
 DEFAULT_RTOL = 1e-5  #: chosen by the work-precision study (docs/accuracy.md)
 ATOL_PER_RTOL = 1e-3  #: atol = ATOL_PER_RTOL * rtol unless atol is given
 PAPER_RTOL = 1e-3  #: Press et al.'s Cash-Karp at 0.1 % error (docs/model.md section 10)
+#: largest scene file read: a scene is about 1 kB, a [sweep] list of 10 million values
+#: about 100 MB; TOML parses in about 0.1 s per MB
+MAX_SCENE_BYTES = 128 * 2**20
 
 GROUNDS = ("sine", "none")
 OPPONENTS = ("tower", "wall")
@@ -308,8 +312,13 @@ def _show(value: object) -> str:
     if isinstance(value, float | np.floating):
         return repr(float(value))
     if isinstance(value, str):
-        return repr(value)
-    text = repr(value)
+        return shorten(value, quote=True)
+    if isinstance(value, int) and value.bit_length() > 64:  # repr: 4300 digits at most
+        return f"an integer of {value.bit_length()} bits"
+    try:
+        text = repr(value)
+    except (ValueError, RecursionError):  # a huge integer inside a list, deep nesting
+        return f"a {type(value).__name__}"
     return text if len(text) <= 60 else text[:57] + "..."
 
 
@@ -357,7 +366,10 @@ def _number(name: str, value: object, spec: _Spec) -> float:
     if isinstance(value, bool | np.bool_):
         raise _bad(name, value, spec, "must be a number")
     if isinstance(value, int | float | np.integer | np.floating):
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:  # an integer beyond float64 (TOML has no size limit)
+            raise _bad(name, value, spec, "must be finite") from None
     if isinstance(value, str):
         try:
             return float(value.strip())
@@ -369,6 +381,7 @@ def _number(name: str, value: object, spec: _Spec) -> float:
 def _as_int(name: str, value: object, spec: _Spec) -> int:
     if isinstance(value, int | np.integer) and not isinstance(value, bool | np.bool_):
         number = int(value)
+        _number(name, number, spec)  # raises beyond float64: the kernels take floats
     else:
         real = _number(name, value, spec)
         if not (math.isfinite(real) and real.is_integer()):
@@ -419,7 +432,7 @@ def _unknown(
     hints = ["did you mean " + " or ".join(repr(c) for c in close) + "?"] if close else []
     if listing or not close:
         hints.append("known: " + ", ".join(known))
-    return SceneError(f"unknown {what} {str(name)!r} ({'; '.join(hints)})")
+    return SceneError(f"unknown {what} {shorten(name, quote=True)} ({'; '.join(hints)})")
 
 
 # ============================================================ components
@@ -873,7 +886,8 @@ class Scene:
             name, sep, value = str(item).partition("=")
             name = name.strip()
             if not sep or not name or not value.strip():
-                raise SceneError(f"malformed assignment {str(item)!r}: expected name=value")
+                raise SceneError(f"malformed assignment {shorten(item, quote=True)}: "
+                                 "expected name=value")
             if name == "initial_state":
                 raise SceneError(
                     "initial_state can only be set from a scene file ([initial] state = [...])"
@@ -935,8 +949,10 @@ class Scene:
         """
         try:
             data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise SceneError(f"{source}: malformed TOML: {exc}") from None
+        except RecursionError:  # tomllib recurses into nested arrays and tables
+            raise SceneError(f"{source}: malformed TOML: nested too deeply") from None
+        except ValueError as exc:  # TOMLDecodeError, or an integer of > 4300 digits
+            raise SceneError(f"{source}: malformed TOML: {_toml_error(exc)}") from None
         try:
             return _scene_from_tables(data)
         except SceneError as exc:
@@ -1306,11 +1322,23 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     """
     try:
         with open(path, "rb") as handle:
-            raw = handle.read()
+            raw = handle.read(MAX_SCENE_BYTES + 1)
         text = raw.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(f"{os.fspath(path)}: cannot read scene file: {exc}") from None
+    if len(raw) > MAX_SCENE_BYTES:
+        raise SceneError(f"{os.fspath(path)}: not a scene file: more than "
+                         f"{MAX_SCENE_BYTES // 2**20} MB")
     return Scene.from_toml(text, source=os.fspath(path))
+
+
+def _toml_error(exc: ValueError) -> str:
+    """A TOML parser's message, with any quoted key cut short but the position kept."""
+    text = str(exc)
+    where = text.rfind(" (at ")
+    if len(text) <= 160 or where < 0:
+        return shorten(text, 160)
+    return shorten(text[:where], 120) + text[where:]
 
 
 # =============================================================== presets

@@ -35,19 +35,26 @@ import json
 import math
 import multiprocessing as mp
 import os
-import re
 import signal
 import threading
 import time
 from collections import deque
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import __version__
-from .scene import PARAMETERS, SHORTHANDS, Scene, SceneError
+from .grid import (  # noqa: F401 - re-exported: the grid parsing lives in chaospound.grid
+    MAX_POINTS,
+    Axis,
+    axes_from_scene,
+    make_axis,
+    parse_axes,
+    parse_axis,
+)
+from .scene import Scene, SceneError
 from .store import PointResult, SweepWriter
 
 __all__ = [
@@ -62,7 +69,6 @@ __all__ = [
 CONTINUATIONS = ("none", "forward", "backward", "both")
 CLASSIFY_MODES = ("window", "full")
 WINDOW_TOL = 1e-2  #: default stroboscopic tolerance of the window classification
-MAX_POINTS = 10_000_000
 #: finished points are committed to the file at most this often (seconds) ...
 COMMIT_INTERVAL = 1.0
 #: ... or when this many wait: few HDF5 flushes (cheap, and a reader of the running
@@ -80,18 +86,6 @@ class SweepInterrupted(Exception):
                          f"finish with: chaospound sweep ... -o {path} --resume")
         self.done = done
         self.total = total
-
-
-@dataclass(frozen=True)
-class Axis:
-    """One swept parameter and its values."""
-
-    name: str
-    values: np.ndarray
-    spec: str
-
-    def __len__(self) -> int:
-        return int(self.values.shape[0])
 
 
 @dataclass(frozen=True)
@@ -233,74 +227,6 @@ class SweepSummary:
         ]
         lines += [f"  failed: {m}" for m in self.messages[:5]]
         return "\n".join(lines)
-
-
-# ----------------------------------------------------------------- grid parsing
-
-_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-
-
-def parse_axis(text: str, scene: Scene | None = None) -> Axis:
-    """Parse ``name=GRID`` where GRID is ``start:stop:step``, ``start:stop#count``
-    or a comma-separated list of values.
-
-    ``start:stop:step`` includes ``stop`` when it lies on the grid (to within
-    1e-9 of a step); ``start:stop#count`` is ``numpy.linspace(start, stop, count)``.
-    """
-    if "=" not in text:
-        raise ValueError(f"--param {text!r}: expected NAME=GRID, e.g. period_ratio=0.3:2.0:0.005")
-    name, grid = (s.strip() for s in text.split("=", 1))
-    return make_axis(name, grid, scene)
-
-
-def make_axis(name: str, grid: str, scene: Scene | None = None) -> Axis:
-    """An Axis from a parameter name and a grid string (see :func:`parse_axis`)."""
-    if name not in PARAMETERS and name not in SHORTHANDS:
-        import difflib
-
-        close = difflib.get_close_matches(name, list(PARAMETERS) + list(SHORTHANDS), n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise ValueError(f"unknown sweep parameter {name!r}{hint}")
-    values = _grid_values(name, str(grid).strip())
-    if values.size == 0:
-        raise ValueError(f"{name}={grid}: empty range")
-    if not np.all(np.isfinite(values)):
-        raise ValueError(f"{name}={grid}: non-finite values")
-    if scene is not None:
-        for v in (values[0], values[-1]) if values.size > 1 else values[:1]:
-            try:
-                scene.with_params(**{name: float(v)})
-            except SceneError as exc:
-                raise ValueError(f"sweep {name}={grid}: {exc}") from None
-    return Axis(name=name, values=values, spec=str(grid).strip())
-
-
-def _grid_values(name: str, grid: str) -> np.ndarray:
-    m = re.fullmatch(rf"({_NUMBER}):({_NUMBER}):({_NUMBER})", grid)
-    if m:
-        start, stop, step = (float(g) for g in m.groups())
-        if step == 0 or (stop - start) * step < 0:
-            raise ValueError(f"{name}={grid}: empty range (step {step} does not lead from "
-                             f"{start} to {stop})")
-        count = math.floor((stop - start) / step + 1e-9) + 1
-        if count > MAX_POINTS:
-            raise ValueError(f"{name}={grid}: {count} points, more than {MAX_POINTS}")
-        return start + step * np.arange(count)
-    m = re.fullmatch(rf"({_NUMBER}):({_NUMBER})#(\d+)", grid)
-    if m:
-        start, stop, count = float(m.group(1)), float(m.group(2)), int(m.group(3))
-        if count < 1:
-            raise ValueError(f"{name}={grid}: empty range (count 0)")
-        if count > MAX_POINTS:
-            raise ValueError(f"{name}={grid}: {count} points, more than {MAX_POINTS}")
-        return np.linspace(start, stop, count)
-    parts = [p.strip() for p in grid.split(",") if p.strip()]
-    try:
-        return np.array([float(p) for p in parts])
-    except ValueError:
-        raise ValueError(
-            f"{name}={grid}: not a grid; use start:stop:step, start:stop#count or "
-            "v1,v2,...") from None
 
 
 # ----------------------------------------------------------------- the driver
@@ -869,12 +795,3 @@ def _int_or(value, default: int = -1) -> int:
 
 def _float_or(value, default: float = np.nan) -> float:
     return default if value is None else float(value)
-
-
-def axes_from_scene(scene: Scene) -> list[Axis]:
-    """The sweep stored in a preset's [sweep] table, as axes."""
-    return [make_axis(name, grid, scene) for name, grid in scene.sweep]
-
-
-def parse_axes(texts: Iterable[str], scene: Scene) -> list[Axis]:
-    return [parse_axis(t, scene) for t in texts]
