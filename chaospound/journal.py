@@ -21,7 +21,7 @@ Tables::
     orders(branch TEXT PRIMARY KEY, order BLOB)    visiting order, int64 bytes
     points(branch, idx, pos, status, regime, n_impacts, n_strobe, payload)
         one row per finished point; pos = position in the branch's visiting
-        order; payload = :func:`encode_point`
+        order; payload = the point's values, packed by the store (opaque here)
 """
 
 from __future__ import annotations
@@ -30,13 +30,11 @@ import contextlib
 import json
 import os
 import sqlite3
-import struct
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["JOURNAL_FORMAT", "Journal", "JournalError", "decode_point", "encode_point",
-           "fsync_dir", "journal_path"]
+__all__ = ["JOURNAL_FORMAT", "Journal", "JournalError", "fsync_dir", "journal_path"]
 
 JOURNAL_FORMAT = "chaospound-sweep-journal"
 JOURNAL_VERSION = 1
@@ -68,40 +66,6 @@ def remove(path: Path) -> None:
     for p in (path, *sidecars(path)):
         with contextlib.suppress(FileNotFoundError):
             p.unlink()
-
-
-# ------------------------------------------------------------------ the codec
-#
-# A point's payload: a little-endian uint32 header length, a JSON header listing
-# (name, dtype, shape) of each field, then the fields' raw bytes in that order.
-# Every value, scalar or array, is stored as its numpy bytes, so NaN payloads and
-# signed zeros survive bit for bit; strings are stored as the exact bytes the HDF5
-# file will hold.
-
-
-def encode_point(fields: dict[str, np.ndarray]) -> bytes:
-    """Pack named numpy values (scalars or arrays) into one blob."""
-    header, blobs = [], []
-    for name, value in fields.items():
-        arr = np.asarray(value)  # tobytes() is C order; 0-d stays 0-d
-        header.append((name, arr.dtype.str, list(arr.shape)))
-        blobs.append(arr.tobytes())
-    head = json.dumps(header, separators=(",", ":")).encode()
-    return struct.pack("<I", len(head)) + head + b"".join(blobs)
-
-
-def decode_point(blob: bytes) -> dict[str, np.ndarray]:
-    """Inverse of :func:`encode_point`."""
-    (n,) = struct.unpack_from("<I", blob, 0)
-    header = json.loads(blob[4:4 + n])
-    out, offset = {}, 4 + n
-    for name, dtype, shape in header:
-        dt = np.dtype(dtype)
-        size = dt.itemsize * int(np.prod(shape, dtype=np.int64))
-        out[name] = np.frombuffer(blob, dtype=dt, count=size // dt.itemsize if dt.itemsize
-                                  else 0, offset=offset).reshape(shape).copy()
-        offset += size
-    return out
 
 
 # ---------------------------------------------------------------- the journal
@@ -221,10 +185,10 @@ class Journal:
             out[idx] = status
         return out
 
-    def payload(self, branch: str, idx: int) -> dict[str, np.ndarray] | None:
+    def payload(self, branch: str, idx: int) -> bytes | None:
         row = self.conn.execute("SELECT payload FROM points WHERE branch = ? AND idx = ?",
                                 (branch, int(idx))).fetchone()
-        return None if row is None else decode_point(row[0])
+        return None if row is None else row[0]
 
     def counts(self, branch: str) -> tuple[int, int, int]:
         """Finished points, impact rows and stroboscopic rows of a branch."""
@@ -243,15 +207,15 @@ class Journal:
             "SELECT COALESCE(SUM(LENGTH(payload)), 0) FROM points").fetchone()[0])
 
     def rows_in_order(self, branch: str, batch: int):
-        """Finished points of a branch in visiting order, in lists of at most ``batch``:
-        (idx, payload dict) pairs."""
-        cursor = self.conn.execute("SELECT idx, payload FROM points WHERE branch = ? "
+        """Payloads of a branch's finished points in visiting order, in lists of at most
+        ``batch``."""
+        cursor = self.conn.execute("SELECT payload FROM points WHERE branch = ? "
                                    "ORDER BY pos", (branch,))
         while True:
             rows = cursor.fetchmany(batch)
             if not rows:
                 return
-            yield [(int(idx), decode_point(blob)) for idx, blob in rows]
+            yield [blob for (blob,) in rows]
 
 
 def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:

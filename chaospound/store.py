@@ -67,7 +67,7 @@ import h5py
 import numpy as np
 
 from .journal import SUFFIX as JOURNAL_SUFFIX
-from .journal import Journal, JournalError, encode_point, fsync_dir, journal_path
+from .journal import Journal, JournalError, fsync_dir, journal_path
 from .journal import remove as remove_journal
 from .lock import OutputBusy, OutputLock
 
@@ -93,7 +93,7 @@ TIMING_FIELDS = ("wall_s", "created")
 MESSAGE_LENGTH = 240
 SEQUENCE_LENGTH = 160  #: room for 53 corner labels of one period
 CHUNK = 4096
-CONSOLIDATE_BATCH = 256  #: points decoded at a time while consolidating (bounded memory)
+CONSOLIDATE_BATCH = 512  #: points decoded at a time while consolidating (bounded memory)
 #: per-point scalar datasets: name -> (dtype, fill value)
 SCALARS = {
     "status": (np.int8, STATUS_PENDING),
@@ -116,6 +116,19 @@ SCALARS = {
     "strobe_start": (np.int64, 0),
     "strobe_count": (np.int64, 0),
 }
+
+
+#: the fixed part of a point's journal payload (little-endian, packed); the variable
+#: parts follow it: final_state, exponents, the impacts' float fields, their corners,
+#: the stroboscopic states, the message and the corner sequence (see :func:`_pack`)
+RECORD = np.dtype([
+    ("index", "<i8"), ("status", "i1"), ("regime", "i1"), ("impacts_per_period", "<i2"),
+    ("period_cycles", "<i2"), ("transient_used", "<i4"), ("strobe_mismatch", "<f8"),
+    ("zero_one", "<f8"), ("max_exponent", "<f8"), ("max_exponent_error", "<f8"),
+    ("wall_s", "<f8"), ("steps", "<i8"), ("rejected", "<i8"), ("rhs_evals", "<i8"),
+    ("impact_count", "<i8"), ("strobe_count", "<i8"), ("message_len", "<i4"),
+    ("sequence_len", "<i4")])
+FLOAT_IMPACTS = tuple(f for f in IMPACT_FIELDS if f != "corner")
 
 
 class SweepStoreError(ValueError):
@@ -262,10 +275,11 @@ class SweepWriter:
         """The last stroboscopic state of a done point (continuation restarts from it)."""
         if self.journal is None:
             return None
-        fields = self.journal.payload(branch, index)
-        if fields is None or int(fields["status"]) != STATUS_DONE:
+        blob = self.journal.payload(branch, index)
+        if blob is None:
             return None
-        return fields["final_state"]
+        point = _unpack([blob], self.n_state, self.n_exponents)
+        return point["final_state"][0] if point["status"][0] == STATUS_DONE else None
 
     def committed(self) -> int:
         """Finished points in the journal, over all branches."""
@@ -295,12 +309,9 @@ class SweepWriter:
         if not results:
             return
         pos = self._pos[branch]
-        rows = []
-        for r in results:
-            fields = _point_fields(r, self.n_exponents)
-            rows.append((int(r.index), int(pos[r.index]), int(r.status),
-                         int(fields["regime"]), int(fields["impact_count"]),
-                         int(fields["strobe_count"]), encode_point(fields)))
+        rows = [(int(r.index), int(pos[r.index]), int(r.status), REGIMES.index(r.regime),
+                 len(r.impacts["time"]), int(r.strobe.shape[0]), _pack_result(r, self.n_exponents))
+                for r in results]
         elapsed = time.perf_counter() - self._started
         try:
             self.journal.commit(branch, rows, elapsed)
@@ -517,37 +528,84 @@ def _root_attributes(meta: dict) -> dict:
     return attrs
 
 
-def _point_fields(r: PointResult, n_exponents: int) -> dict[str, np.ndarray]:
-    """A point's values, converted exactly as the HDF5 datasets store them."""
-    fields = {
-        "status": np.int8(r.status),
-        "message": np.frombuffer(r.message.encode("utf-8")[:MESSAGE_LENGTH], dtype=np.uint8),
-        "regime": np.int8(REGIMES.index(r.regime)),
-        "impacts_per_period": np.int16(r.impacts_per_period),
-        "period_cycles": np.int16(r.period_cycles),
-        "transient_used": np.int32(r.transient_used),
-        "corner_sequence": np.frombuffer(r.corner_sequence.encode("ascii")[:SEQUENCE_LENGTH],
-                                         dtype=np.uint8),
-        "strobe_mismatch": np.float64(r.strobe_mismatch),
-        "zero_one": np.float64(r.zero_one),
-        "max_exponent": np.float64(r.max_exponent),
-        "max_exponent_error": np.float64(r.max_exponent_error),
-        "wall_s": np.float64(r.wall_s),
-        "steps": np.int64(r.steps),
-        "rejected": np.int64(r.rejected),
-        "rhs_evals": np.int64(r.rhs_evals),
-        "impact_count": np.int64(len(r.impacts["time"])),
-        "strobe_count": np.int64(r.strobe.shape[0]),
-        "final_state": np.asarray(r.final_state, dtype=np.float64),
-        "strobe": np.asarray(r.strobe, dtype=np.float64),
-    }
+def _pack_result(r: PointResult, n_exponents: int) -> bytes:
+    """A point's journal payload, from the worker's result."""
+    record = np.zeros((), dtype=RECORD)
+    message = r.message.encode("utf-8")[:MESSAGE_LENGTH]
+    sequence = r.corner_sequence.encode("ascii")[:SEQUENCE_LENGTH]
+    for name in RECORD.names:
+        if name == "message_len":
+            record[name] = len(message)
+        elif name == "sequence_len":
+            record[name] = len(sequence)
+        elif name == "regime":
+            record[name] = REGIMES.index(r.regime)
+        elif name == "impact_count":
+            record[name] = len(r.impacts["time"])
+        elif name == "strobe_count":
+            record[name] = r.strobe.shape[0]
+        else:
+            record[name] = getattr(r, name)
+    exponents = None
     if n_exponents:
-        fields["exponents"] = (np.asarray(r.exponents, dtype=np.float64)
-                               if r.exponents is not None else np.full(n_exponents, np.nan))
-    for name in IMPACT_FIELDS:
-        dtype = np.int8 if name == "corner" else np.float64
-        fields[f"impacts/{name}"] = np.asarray(r.impacts[name], dtype=dtype)
-    return fields
+        exponents = r.exponents if r.exponents is not None else np.full(n_exponents, np.nan)
+    return _pack(record, r.final_state, exponents, r.impacts, r.strobe, message, sequence)
+
+
+def _pack(record: np.ndarray, final_state, exponents, impacts: dict, strobe, message: bytes,
+          sequence: bytes) -> bytes:
+    """Concatenate a point's fixed record and its variable parts (see :data:`RECORD`)."""
+    parts = [record.tobytes(), np.asarray(final_state, dtype="<f8").tobytes()]
+    if exponents is not None:
+        parts.append(np.asarray(exponents, dtype="<f8").tobytes())
+    parts += [np.asarray(impacts[f], dtype="<f8").tobytes() for f in FLOAT_IMPACTS]
+    parts += [np.asarray(impacts["corner"], dtype="i1").tobytes(),
+              np.asarray(strobe, dtype="<f8").tobytes(), message, sequence]
+    return b"".join(parts)
+
+
+def _unpack(blobs: list[bytes], n_state: int, n_exponents: int) -> dict:
+    """Columns of a batch of payloads, in the batch's order: the record's fields, plus
+    final_state, exponents, message, corner_sequence, and the flat impacts/strobe rows."""
+    size = RECORD.itemsize
+    records = np.frombuffer(b"".join(blob[:size] for blob in blobs), dtype=RECORD)
+    n = len(blobs)
+    out = {name: records[name] for name in RECORD.names}
+    final = np.empty((n, n_state))
+    exponents = np.empty((n, n_exponents))
+    flat = {f: [] for f in IMPACT_FIELDS}
+    strobe, messages, sequences = [], [], []
+
+    def take(blob, dtype, count, offset):
+        return (np.frombuffer(blob, dtype=dtype, count=count, offset=offset) if count
+                else np.zeros(0, dtype=dtype))
+
+    for j, blob in enumerate(blobs):
+        n_imp, n_strobe = int(records["impact_count"][j]), int(records["strobe_count"][j])
+        at = size
+        final[j] = take(blob, "<f8", n_state, at)
+        at += 8 * n_state
+        if n_exponents:
+            exponents[j] = take(blob, "<f8", n_exponents, at)
+            at += 8 * n_exponents
+        for f in FLOAT_IMPACTS:
+            flat[f].append(take(blob, "<f8", n_imp, at))
+            at += 8 * n_imp
+        flat["corner"].append(take(blob, "i1", n_imp, at))
+        at += n_imp
+        strobe.append(take(blob, "<f8", n_strobe * n_state, at).reshape(n_strobe, n_state))
+        at += 8 * n_strobe * n_state
+        m, q = int(records["message_len"][j]), int(records["sequence_len"][j])
+        messages.append(blob[at:at + m])
+        sequences.append(blob[at + m:at + m + q])
+    out["final_state"] = final
+    if n_exponents:
+        out["exponents"] = exponents
+    out["message"] = np.array(messages, dtype=f"S{MESSAGE_LENGTH}")
+    out["corner_sequence"] = np.array(sequences, dtype=f"S{SEQUENCE_LENGTH}")
+    out["impacts"] = {f: np.concatenate(flat[f]) for f in IMPACT_FIELDS}
+    out["strobe"] = np.concatenate(strobe) if strobe else np.zeros((0, n_state))
+    return out
 
 
 def _consolidate(f: h5py.File, journal: Journal) -> None:
@@ -590,35 +648,21 @@ def _write_branch(b: h5py.Group, journal: Journal, branch: str) -> None:
         chunks=(CHUNK // 4, n_state), **compressed)
     imp_row = strobe_row = 0
     for batch in journal.rows_in_order(branch, CONSOLIDATE_BATCH):
-        idx = np.array([i for i, _ in batch], dtype=np.int64)
-        points = [fields for _, fields in batch]
-        counts = np.array([p["impact_count"] for p in points], dtype=np.int64)
-        s_counts = np.array([p["strobe_count"] for p in points], dtype=np.int64)
-        columns = {
-            "impact_start": imp_row + np.concatenate(([0], np.cumsum(counts)[:-1])),
-            "strobe_start": strobe_row + np.concatenate(([0], np.cumsum(s_counts)[:-1])),
-            "message": np.array([p["message"].tobytes() for p in points],
-                                dtype=f"S{MESSAGE_LENGTH}"),
-            "corner_sequence": np.array([p["corner_sequence"].tobytes() for p in points],
-                                        dtype=f"S{SEQUENCE_LENGTH}"),
-        }
-        for name, (dtype, _) in SCALARS.items():
-            if name not in columns:
-                columns[name] = np.array([p[name] for p in points], dtype=dtype)
-        for name in vectors:
-            columns[name] = np.stack([p[name] for p in points])
+        point = _unpack(batch, n_state, k)
+        counts, s_counts = point["impact_count"], point["strobe_count"]
+        point["impact_start"] = imp_row + np.concatenate(([0], np.cumsum(counts)[:-1]))
+        point["strobe_start"] = strobe_row + np.concatenate(([0], np.cumsum(s_counts)[:-1]))
+        idx = point["index"]
         sort = np.argsort(idx)
         where = _index(idx[sort])
-        for name, values in columns.items():
-            b[name][where] = values[sort]
+        for name in (*SCALARS, *vectors):
+            b[name][where] = np.asarray(point[name], dtype=b[name].dtype)[sort]
         new_imp, new_strobe = int(counts.sum()), int(s_counts.sum())
         if new_imp:
             for field in IMPACT_FIELDS:
-                imp[field][imp_row:imp_row + new_imp] = np.concatenate(
-                    [p[f"impacts/{field}"] for p in points])
+                imp[field][imp_row:imp_row + new_imp] = point["impacts"][field]
         if new_strobe:
-            strobe[strobe_row:strobe_row + new_strobe] = np.concatenate(
-                [p["strobe"] for p in points])
+            strobe[strobe_row:strobe_row + new_strobe] = point["strobe"]
         imp_row += new_imp
         strobe_row += new_strobe
 
@@ -655,20 +699,25 @@ def _import_unfinished(f: h5py.File, journal: Journal, branches: dict) -> None:
         rows = []
         for i in np.asarray(order)[status[np.asarray(order)] != STATUS_PENDING]:
             i = int(i)
-            fields = {}
-            for name in arrays:
-                value = arrays[name][i]
-                if name in ("message", "corner_sequence"):
-                    value = np.frombuffer(bytes(value), dtype=np.uint8)
-                fields[name] = value
+            record = np.zeros((), dtype=RECORD)
+            message, sequence = bytes(arrays["message"][i]), bytes(arrays["corner_sequence"][i])
+            for name in RECORD.names:
+                if name == "index":
+                    record[name] = i
+                elif name == "message_len":
+                    record[name] = len(message)
+                elif name == "sequence_len":
+                    record[name] = len(sequence)
+                else:
+                    record[name] = arrays[name][i]
             s, c = int(arrays["impact_start"][i]), int(arrays["impact_count"][i])
-            for name in IMPACT_FIELDS:
-                fields[f"impacts/{name}"] = impacts[name][s:s + c]
+            point_impacts = {name: impacts[name][s:s + c] for name in IMPACT_FIELDS}
             s, c = int(arrays["strobe_start"][i]), int(arrays["strobe_count"][i])
-            fields["strobe"] = states[s:s + c]
-            rows.append((i, int(pos[i]), int(status[i]), int(fields["regime"]),
-                         int(fields["impact_count"]), int(fields["strobe_count"]),
-                         encode_point(fields)))
+            exponents = arrays["exponents"][i] if "exponents" in arrays else None
+            blob = _pack(record, arrays["final_state"][i], exponents, point_impacts,
+                         states[s:s + c], message, sequence)
+            rows.append((i, int(pos[i]), int(status[i]), int(record["regime"]),
+                         int(record["impact_count"]), int(record["strobe_count"]), blob))
         journal.commit(branch, rows, 0.0)
     journal.conn.execute("UPDATE meta SET value = ? WHERE key = 'wall_s'",
                          (float(f.attrs.get("wall_s", 0.0)),))

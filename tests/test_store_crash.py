@@ -357,3 +357,68 @@ def test_full_disk_exits_1_and_the_committed_points_resume(small_disk, reference
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     assert_same_store(path, reference_file)
+
+
+# ------------------------------------------------------------------------ Dask
+
+
+def dask_storm(tmp_path: Path, reference: Path, points: int, kills: int, seed: int) -> dict:
+    """The storm on the Dask backend (``--scheduler local``): the client process killed
+    (alone or with its cluster's process group), or one of its worker processes killed
+    while the sweep goes on (the nanny restarts it and its tasks are rerun)."""
+    pytest.importorskip("distributed")
+    psutil = pytest.importorskip("psutil")
+    rng = random.Random(seed)
+    path = tmp_path / "dask-storm.h5"
+    seen = {"client_killed": 0, "worker_killed": 0, "finished": 0}
+    for k in range(kills):
+        finished = path.exists() and not journal_path(path).exists()
+        option = ["--overwrite"] if finished else ["--resume"] if k else []
+        proc = start(path, points, "--scheduler", "local", *option)
+        if not wait_for(lambda p=proc: sweep_progress_or_zero(path) > 0 or p.poll() is not None,
+                        120, 0.02):
+            pytest.fail("the Dask sweep never committed a point")
+        if rng.random() < 0.3 and proc.poll() is None:  # a worker dies, the sweep goes on
+            workers = [c for c in psutil.Process(proc.pid).children(recursive=True)
+                       if "spawn_main" in " ".join(c.cmdline())]
+            if workers:
+                rng.choice(workers).kill()
+                seen["worker_killed"] += 1
+        time.sleep(rng.uniform(0.0, 2.0))
+        if proc.poll() is None:
+            kill(proc, group=rng.random() < 0.5)
+            seen["client_killed"] += 1
+        else:
+            assert proc.wait() == 0, proc.stderr.read()
+            seen["finished"] += 1
+        reap_group(proc)
+        proc.stderr.close()
+        if journal_path(path).exists():
+            assert_committed_points_correct(path, reference)
+        if path.exists():
+            assert_same_store(path, reference)
+    proc = subprocess.run(sweep_command(path, points, "--resume"), env=env(),
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert_same_store(path, reference)
+    return seen
+
+
+def sweep_progress_or_zero(path: Path) -> int:
+    try:
+        return sweep_progress(path)[0]
+    except Exception:  # noqa: BLE001 - not there yet
+        return 0
+
+
+def test_dask_client_killed_then_resumed(tmp_path, reference):
+    """One kill of a Dask sweep's client (and its local cluster), then --resume."""
+    seen = dask_storm(tmp_path, reference(600), 600, kills=1, seed=3)
+    assert seen["client_killed"] + seen["finished"] == 1
+
+
+@pytest.mark.slow
+def test_dask_kill_storm(tmp_path, reference):
+    """20 kills of Dask clients and workers, each followed by a resume."""
+    seen = dask_storm(tmp_path, reference(1500), 1500, kills=20, seed=7)
+    assert seen["client_killed"] >= 10 and seen["worker_killed"] >= 2, seen
