@@ -29,6 +29,7 @@ import itertools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from decimal import Decimal
 
 import numpy as np
 
@@ -126,6 +127,9 @@ def grid_values(name: str, grid: str) -> np.ndarray:
                 raise ValueError(f"{shown}: not a grid; {_SYNTAX}")
             start, stop, step = (_number(shown, p) for p in parts)
             values = _range(shown, start, stop, step)
+            exact = _decimal_values(parts[0], parts[2], values.size)
+            if exact is not None:
+                values = exact
     else:
         values = _list(shown, grid)
     if values.size == 0:
@@ -190,6 +194,31 @@ def _range(shown: str, start: float, stop: float, step: float) -> np.ndarray:
             # reported by grid_values
             values = 2.0 * (0.5 * start + (0.5 * step) * k)
     return values
+
+
+def _decimal_values(start: str, step: str, count: int) -> np.ndarray | None:
+    """``start + k step`` as the doubles nearest the decimal values the user typed.
+
+    ``0.3:2.0:0.1`` then holds exactly the doubles of 0.3, 0.4, ..., 2.0 (``start
+    + k step`` in floating point gives 0.7999999999999999 for 0.8), so that grid
+    coordinates compare equal to typed values (``.sel(period_ratio=0.8)``). With
+    both numbers written with at most 15 decimals, n = (start + k step) 10^d is an
+    integer below 2^53, exact in float64, and n / 10^d is one correctly rounded
+    division. None when that does not hold (the float formula is used).
+    """
+    try:
+        first, stride = Decimal(start.strip()), Decimal(step.strip())
+    except ArithmeticError:
+        return None
+    exponent = min(first.as_tuple().exponent, stride.as_tuple().exponent, 0)
+    if not isinstance(exponent, int) or exponent < -15:
+        return None
+    scale = 10 ** -exponent
+    first_n, stride_n = int(first * scale), int(stride * scale)
+    last_n = first_n + stride_n * (count - 1)
+    if max(abs(first_n), abs(last_n)) >= 2**53:
+        return None
+    return (first_n + stride_n * np.arange(count, dtype=np.int64)) / float(scale)
 
 
 def _list(shown: str, grid: str) -> np.ndarray:

@@ -70,6 +70,7 @@ from .journal import SUFFIX as JOURNAL_SUFFIX
 from .journal import Journal, JournalError, fsync_dir, journal_path
 from .journal import remove as remove_journal
 from .lock import OutputBusy, OutputLock
+from .messages import shorten
 
 __all__ = ["FORMAT", "REGIMES", "StoreWriteError", "SweepFile", "SweepStoreError",
            "SweepWriter", "open_sweep"]
@@ -445,8 +446,92 @@ class SweepFile:
         return np.stack([a.ravel() for a in axes], axis=1)
 
     def array(self, name: str, branch: str | None = None) -> np.ndarray:
-        """A per-point array (e.g. "max_exponent", "status", "steps")."""
-        return self._data[self._branch(branch)][name]
+        """A per-point array (e.g. "max_exponent", "status", "steps"), by grid index."""
+        data = self._data[self._branch(branch)]
+        if name not in data or name in ("impacts", "strobe"):
+            names = sorted(k for k in data if k not in ("impacts", "strobe"))
+            raise SweepStoreError(f"no per-point array {shorten(name, quote=True)}; the store "
+                                  f"has: {', '.join(names)}")
+        return data[name]
+
+    def to_xarray(self, branch: str | None = None):
+        """One branch as an ``xarray.Dataset`` with named dimensions and units.
+
+        Per-point arrays have the swept parameters as dimensions (coordinates:
+        the grid values, exactly as stored, so ``.sel(period_ratio=0.9)``
+        works), plus ``state`` or ``exponent`` for vectors; regimes, statuses,
+        messages and corner sequences are strings. The flat impact and
+        stroboscopic rows keep their own dimensions (``impact``, ``strobe_row``)
+        and are addressed by ``impact_start``/``impact_count`` and
+        ``strobe_start``/``strobe_count``. Attributes carry the scene, the sweep
+        definition, the model and the units.
+        """
+        import xarray as xr
+
+        name = self._branch(branch)
+        data = self._data[name]
+        dims = tuple(self.parameters)
+        shape = self.shape
+        coords = {p: (p, self.grid[p], {"long_name": AXIS_LABELS.get(p, p),
+                                        "units": "1 (dimensionless)"})
+                  for p in self.parameters}
+        coords["state"] = ("state", np.array(self.state_names))
+        variables = {}
+        for key, values in data.items():
+            if key in ("impacts", "strobe", "order"):
+                continue
+            values = np.asarray(values)
+            if key == "regime":
+                values = np.array([REGIMES[int(c)] for c in values])
+            elif key == "status":
+                values = np.array([("pending", "done", "failed")[int(c)] for c in values])
+            elif values.dtype.kind == "S":
+                values = np.char.decode(values, "utf-8", errors="replace")
+            extra = {"final_state": ("state",), "exponents": ("exponent",)}.get(key, ())
+            variables[key] = (dims + extra, values.reshape(shape + values.shape[1:]),
+                              _var_attrs(key))
+        variables["order"] = (("visit",), data["order"],
+                              {"long_name": "grid indices (row-major) in visiting order"})
+        for field, values in data["impacts"].items():
+            if field == "corner":
+                from .kernels.integrate import CORNER_LABELS
+
+                values = np.array([CORNER_LABELS[int(c)] for c in values], dtype="U4")
+            variables[f"impact_{field}"] = (("impact",), values, _var_attrs(field))
+        variables["strobe_state"] = (("strobe_row", "state"), data["strobe"],
+                                     _var_attrs("strobe_state"))
+        attrs = {k: v for k, v in self.meta.items() if isinstance(v, str | int | float)}
+        attrs["branch"] = name
+        return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+    def close(self) -> None:
+        """Nothing to release: the store is read whole when it is opened."""
+
+    def __enter__(self) -> SweepFile:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        try:
+            scene = json.loads(self.meta["scene_resolved"]).get("name", "?")
+        except (KeyError, TypeError, ValueError):
+            scene = "?"
+        axes = ", ".join(f"{p} {self.grid[p][0]:g}..{self.grid[p][-1]:g} "
+                         f"({len(self.grid[p])})" for p in self.parameters)
+        lines = [f"<chaospound sweep {self.path.name}{' (live journal)' if self.live else ''}: "
+                 f"scene {scene!r}, {self.meta.get('model', '?')} model",
+                 f"  grid: {axes}"]
+        for b in self.branches:
+            status = self._data[b]["status"]
+            codes = self._data[b]["regime"][status != STATUS_PENDING]
+            values, counts = np.unique(codes, return_counts=True)
+            regimes = ", ".join(f"{REGIMES[int(v)]} {c}" for v, c in zip(values, counts,
+                                                                          strict=True))
+            lines.append(f"  {b}: {int((status != STATUS_PENDING).sum())} of {status.size} "
+                         f"done; {regimes or 'no points yet'}")
+        return "\n".join(lines) + ">"
 
     def regimes(self, branch: str | None = None) -> list[str]:
         return [REGIMES[int(c)] for c in self.array("regime", branch)]
@@ -484,6 +569,25 @@ class SweepFile:
         if branch not in self.branches:
             raise SweepStoreError(f"branch {branch!r}: the file has {', '.join(self.branches)}")
         return branch
+
+
+#: axis labels of the usual swept parameters (symbols, dimensionless)
+AXIS_LABELS = {"period_ratio": "T/T_Ax", "gap": "a/A_g", "freq_ratio": "T_Ax/T_Bx",
+               "mass_ratio": "m_A/m_B", "beta": "beta", "chi": "chi"}
+#: units of stored quantities (per-point and flat)
+_UNIT_OF = {
+    "time": UNITS["time"], "duration": UNITS["time"], "phase": UNITS["phase"],
+    "velocity": UNITS["velocity"], "peak_penetration": UNITS["length"],
+    "peak_force": UNITS["force"], "max_exponent": UNITS["exponents"],
+    "max_exponent_error": UNITS["exponents"], "exponents": UNITS["exponents"],
+    "wall_s": "s", "transient_used": "excitation cycles", "period_cycles": "excitation cycles",
+    "final_state": "A_g, A_g omega_Ax, rad, rad omega_Ax (by state)",
+    "strobe_state": "A_g, A_g omega_Ax, rad, rad omega_Ax (by state)",
+}
+
+
+def _var_attrs(name: str) -> dict:
+    return {"units": _UNIT_OF[name]} if name in _UNIT_OF else {}
 
 
 def open_sweep(path) -> SweepFile:

@@ -321,3 +321,74 @@ def test_messages_survive_truncation(tmp_path):
         writer.write("fresh", [failed])
     message = open_sweep(path).messages()[0]
     assert message.startswith("é" * 10) and len(message.encode()) <= store.MESSAGE_LENGTH + 3
+
+
+# ------------------------------------------------------------ analysis API
+
+
+def test_to_xarray_round_trips_every_dataset(both_file):
+    """Every dataset of both branches comes back through to_xarray, bit for bit, with the
+    swept parameters as named dimensions, regimes as strings and units as attributes."""
+    xr = pytest.importorskip("xarray")
+    sweep = open_sweep(both_file)
+    with h5py.File(both_file, "r") as f:
+        for branch in sweep.branches:
+            ds = sweep.to_xarray(branch)
+            assert isinstance(ds, xr.Dataset) and ds.attrs["branch"] == branch
+            g = f[branch]
+            names = []
+            g.visititems(lambda n, obj, names=names: names.append(n)
+                         if isinstance(obj, h5py.Dataset) else None)
+            for name in names:
+                stored = g[name][()]
+                if name.startswith("impacts/"):
+                    var = ds[f"impact_{name.split('/')[1]}"].values
+                    if name.endswith("corner"):
+                        from chaospound.kernels.integrate import CORNER_LABELS
+                        stored = np.array([CORNER_LABELS[int(c)] for c in stored])
+                        assert list(var) == list(stored)
+                        continue
+                    assert bitwise(var, stored), name
+                elif name == "strobe/state":
+                    assert bitwise(ds["strobe_state"].values, stored)
+                elif name == "order":
+                    assert bitwise(ds["order"].values, stored)
+                elif name == "regime":
+                    assert list(ds["regime"].values) == [REGIMES[int(c)] for c in stored]
+                elif name == "status":
+                    assert set(ds["status"].values) == {"done"}
+                elif stored.dtype.kind == "S":
+                    assert list(ds[name].values) == [v.decode() for v in stored]
+                else:
+                    assert ds[name].dims[0] == "period_ratio"
+                    assert bitwise(ds[name].values, stored), name
+            assert ds["impact_velocity"].attrs["units"] == store.UNITS["velocity"]
+            assert ds["max_exponent"].attrs["units"] == store.UNITS["exponents"]
+            assert list(ds["state"].values) == sweep.state_names
+            value = float(sweep.grid["period_ratio"][3])
+            assert ds.sel(period_ratio=value)["steps"].item() == sweep.array("steps", branch)[3]
+
+
+def test_grid_coordinates_are_the_typed_decimals(tmp_path):
+    """start:stop:step grids hold the doubles of the decimals typed (0.8, not
+    0.7999999999999999), so that coordinates compare equal to typed values."""
+    axis = parse_axis("period_ratio=0.6:1.2:0.1", WALL)
+    assert axis.values.tolist() == [0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2]
+    assert parse_axis("gap=0.5:1.5:0.25", WALL).values.tolist() == [0.5, 0.75, 1.0, 1.25, 1.5]
+    path = tmp_path / "exact.h5"
+    run_sweep(WALL, SweepSpec((axis,)), path, progress=False)
+    with open_sweep(path) as sweep:
+        ds = sweep.to_xarray()
+        assert ds.sel(period_ratio=0.8)["regime"].item() == sweep.regimes()[2]
+        assert ds.sel(period_ratio=0.9)["steps"].item() == sweep.array("steps")[3]
+
+
+def test_reader_repr_and_errors_name_the_valid_choices(both_file):
+    sweep = open_sweep(both_file)
+    text = repr(sweep)
+    assert text.count("\n") < 10 and "period_ratio 0.6..1.3 (8)" in text
+    assert "forward: 8 of 8 done" in text and "backward: 8 of 8 done" in text
+    with pytest.raises(SweepStoreError, match="no per-point array 'velocityy'.*max_exponent"):
+        sweep.array("velocityy")
+    with pytest.raises(SweepStoreError, match="branch 'fresh': the file has forward, backward"):
+        sweep.to_xarray("fresh")
