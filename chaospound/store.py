@@ -734,19 +734,22 @@ def _write_branch(b: h5py.Group, journal: Journal, branch: str) -> None:
     b.attrs["strobe_committed"] = n_strobe
     b.attrs["REGIMES"] = json.dumps(REGIMES)
     b.create_dataset("order", data=order)
+    # every dataset is opened once: h5py drops a dataset's chunk cache when the object
+    # goes, and re-opening per batch would recompress each gzip chunk once per batch
     compressed = {"compression": "gzip", "shuffle": True}
-    for name, (dtype, fill) in SCALARS.items():
-        b.create_dataset(name, shape=(n_points,), dtype=dtype, fillvalue=fill,
-                         chunks=(min(n_points, CHUNK),), **compressed)
-    vectors = {"final_state": n_state, **({"exponents": k} if k else {})}
-    for name, width in vectors.items():
-        b.create_dataset(name, shape=(n_points, width), dtype=np.float64, fillvalue=np.nan,
-                         chunks=(min(n_points, CHUNK), width), **compressed)
-    imp = b.create_group("impacts")
-    for field in IMPACT_FIELDS:
-        imp.create_dataset(field, shape=(n_impacts,), maxshape=(None,),
-                           dtype=np.int8 if field == "corner" else np.float64,
-                           chunks=(CHUNK,), **compressed)
+    per_point = {name: b.create_dataset(name, shape=(n_points,), dtype=dtype, fillvalue=fill,
+                                        chunks=(min(n_points, CHUNK),), **compressed)
+                 for name, (dtype, fill) in SCALARS.items()}
+    widths = {"final_state": n_state, **({"exponents": k} if k else {})}
+    for name, width in widths.items():
+        per_point[name] = b.create_dataset(name, shape=(n_points, width), dtype=np.float64,
+                                           fillvalue=np.nan, chunks=(min(n_points, CHUNK), width),
+                                           **compressed)
+    group = b.create_group("impacts")
+    imp = {field: group.create_dataset(field, shape=(n_impacts,), maxshape=(None,),
+                                       dtype=np.int8 if field == "corner" else np.float64,
+                                       chunks=(CHUNK,), **compressed)
+           for field in IMPACT_FIELDS}
     strobe = b.create_group("strobe").create_dataset(
         "state", shape=(n_strobe, n_state), maxshape=(None, n_state), dtype=np.float64,
         chunks=(CHUNK // 4, n_state), **compressed)
@@ -759,12 +762,12 @@ def _write_branch(b: h5py.Group, journal: Journal, branch: str) -> None:
         idx = point["index"]
         sort = np.argsort(idx)
         where = _index(idx[sort])
-        for name in (*SCALARS, *vectors):
-            b[name][where] = np.asarray(point[name], dtype=b[name].dtype)[sort]
+        for name, ds in per_point.items():
+            ds[where] = np.asarray(point[name], dtype=ds.dtype)[sort]
         new_imp, new_strobe = int(counts.sum()), int(s_counts.sum())
         if new_imp:
-            for field in IMPACT_FIELDS:
-                imp[field][imp_row:imp_row + new_imp] = point["impacts"][field]
+            for field, ds in imp.items():
+                ds[imp_row:imp_row + new_imp] = point["impacts"][field]
         if new_strobe:
             strobe[strobe_row:strobe_row + new_strobe] = point["strobe"]
         imp_row += new_imp
