@@ -374,9 +374,14 @@ def dask_storm(tmp_path: Path, reference: Path, points: int, kills: int, seed: i
     for k in range(kills):
         finished = path.exists() and not journal_path(path).exists()
         option = ["--overwrite"] if finished else ["--resume"] if k else []
+        journal = journal_path(path)
+        before = sweep_progress_or_zero(path) if journal.exists() else 0
         proc = start(path, points, "--scheduler", "local", *option)
-        if not wait_for(lambda p=proc: sweep_progress_or_zero(path) > 0 or p.poll() is not None,
-                        120, 0.02):
+        def committed(p=proc, journal=journal, before=before) -> bool:  # this run's first
+            return (journal.exists() and sweep_progress_or_zero(path) > before) \
+                or p.poll() is not None
+
+        if not wait_for(committed, 120, 0.02):
             pytest.fail("the Dask sweep never committed a point")
         if rng.random() < 0.3 and proc.poll() is None:  # a worker dies, the sweep goes on
             workers = [c for c in psutil.Process(proc.pid).children(recursive=True)
@@ -405,6 +410,9 @@ def dask_storm(tmp_path: Path, reference: Path, points: int, kills: int, seed: i
 
 
 def sweep_progress_or_zero(path: Path) -> int:
+    """Points done so far; 0 before the sweep has written anything."""
+    if not (path.exists() or journal_path(path).exists()):
+        return 0
     try:
         return sweep_progress(path)[0]
     except Exception:  # noqa: BLE001 - not there yet
