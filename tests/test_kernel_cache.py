@@ -4,7 +4,7 @@ Numba stamps a cached function with the hash of its own source file only: a
 kernel of ``reference.py`` keeps the constants of the ``params.py`` it was
 compiled with. The kernels package compares a hash of all its modules with a
 stamp beside the cache and clears the cache when they differ
-(:func:`chaospound.kernels.invalidate_stale_cache`). Each test works on a copy
+(:func:`chaospound.kernels.cache.invalidate_stale_cache`). Each test works on a copy
 of the package, in fresh processes.
 """
 
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from chaospound.kernels import STAMP_NAME, source_digest
+from chaospound.kernels.cache import STAMP_NAME, source_digest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "chaospound"
 
