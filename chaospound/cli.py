@@ -1191,7 +1191,7 @@ def _count(text: str) -> int:
 
 def _is_simulation_error(exc: BaseException) -> bool:
     """True for chaospound.simulate.SimulationError (without importing the kernels)."""
-    module = sys.modules.get("chaospound.simulate")
+    module = sys.modules.get("chaospound.dynamics.system")  # defines SimulationError
     return module is not None and isinstance(exc, module.SimulationError)
 
 

@@ -146,7 +146,7 @@ def default_chunk(client, n_points: int) -> int:
 
 def run_task_remote(payload, indices, start_state, continuation):
     """Worker side: run one task of the sweep (scene and spec from ``payload``)."""
-    from .sweep import run_task
+    from .point import run_task
 
     scene, spec = payload
     return run_task(scene, spec, indices, start_state, continuation)

@@ -54,7 +54,6 @@ from chaospound.kernels.params import (
     T_L,
     T_MU,
     T_MU_RHO2,
-    T_OM,
     T_OM2,
     T_OMT2,
     T_RHO2,
@@ -1079,7 +1078,6 @@ def _pack_tower(
     """
     rho2 = tower.rho2
     omt2 = tower.torsion_frequency2(om)
-    p[base + T_OM] = om
     p[base + T_OM2] = om**2
     p[base + T_MU] = mu
     p[base + T_CX] = 2.0 * tower.zeta_x * om

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .dynamics.system import SimulationError, System
+from .dynamics.system import raise_on_failure as _raise_on_failure
 from .kernels import integrate as kin
 from .kernels.params import (
     MODEL_DIMS,
@@ -25,9 +26,6 @@ from .kernels.params import (
 )
 from .kernels.rk import METHOD_NAMES
 from .scene import STATE_NAMES, Scene
-
-if TYPE_CHECKING:
-    from .dynamics.system import System
 
 __all__ = [
     "Impacts",
@@ -41,10 +39,6 @@ __all__ = [
 
 CORNER_LABELS = kin.CORNER_LABELS
 _NO_TANGENT = np.zeros((0, 0))  #: tangent_log placeholder for plain runs
-
-
-class SimulationError(RuntimeError):
-    """A run that could not finish (step budget, step-size underflow, NaN)."""
 
 
 @dataclass(frozen=True)
@@ -224,8 +218,6 @@ class _SceneRun:
 
     @classmethod
     def of_system(cls, system) -> _SceneRun:
-        from .dynamics.system import System
-
         if not isinstance(system, System):
             raise TypeError(f"expected a Scene or a System, got {type(system).__name__}")
         if system.scene is not None:
@@ -394,19 +386,3 @@ def warm_up() -> None:
                    np.zeros((2, 2)), np.zeros((1, 3)), np.zeros((0, kin.N_IMP_FIELDS)),
                    np.zeros((0, 2)), stats, _NO_TANGENT)
     _WARM.append(True)
-
-
-def _raise_on_failure(status, stats, clock, period, max_steps, y) -> None:
-    if status == kin.STATUS_OK:
-        return
-    where = f"at cycle {int(clock[0])}, t = {clock[0] * period + clock[1]:.6g}"
-    done = f"{int(stats[kin.ST_ACCEPTED])} steps accepted, {int(stats[kin.ST_REJECTED])} rejected"
-    if status == kin.STATUS_MAX_STEPS:
-        msg = (f"step budget max_steps = {max_steps} exhausted {where} ({done}); "
-               "raise max_steps or loosen rtol")
-    elif status == kin.STATUS_STEP_UNDERFLOW:
-        msg = (f"step size fell below round-off {where} ({done}, last h = {clock[2]:.3g}); "
-               "the contact is too stiff for this tolerance")
-    else:
-        msg = f"state became non-finite {where} ({done})"
-    raise SimulationError(msg)

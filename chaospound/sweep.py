@@ -54,7 +54,8 @@ from .grid import (  # noqa: F401 - re-exported: the grid parsing lives in chaos
     parse_axes,
     parse_axis,
 )
-from .scene import Scene, SceneError
+from .point import run_point, run_task  # noqa: F401 - run_point re-exported
+from .scene import Scene
 from .store import PointResult, SweepWriter
 
 __all__ = [
@@ -694,104 +695,3 @@ def die_with_parent(parent: int) -> None:
 
 def _run_in_worker(indices, start_state, continuation):
     return run_task(_WORKER["scene"], _WORKER["spec"], indices, start_state, continuation)
-
-
-# ------------------------------------------------------------------ one point
-
-
-def run_task(scene: Scene, spec: SweepSpec, indices: Sequence[int],
-             start_state: np.ndarray | None, continuation: bool) -> list[PointResult]:
-    """Run grid points in order; with continuation each starts from the previous one."""
-    results = []
-    state = start_state
-    for index in indices:
-        result = run_point(scene, spec, int(index), state if continuation else None)
-        results.append(result)
-        if continuation:
-            state = result.final_state if result.status == 1 else None
-    return results
-
-
-def run_point(scene: Scene, spec: SweepSpec, index: int,
-              start_state: np.ndarray | None = None) -> PointResult:
-    """Steady run, classification and optional exponents of one grid point."""
-    from .dynamics.classify import classify, classify_sequence, length_weights
-    from .dynamics.lyapunov import lyapunov_spectrum
-    from .simulate import SimulationError, simulate
-
-    started = time.perf_counter()
-    n_state = len(scene.initial_vector())
-    n_exp = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
-    try:
-        point = scene.with_params(**spec.point_values(index))
-        sim = simulate(point, initial_state=start_state,
-                       start_at_section=start_state is not None)
-        exps = errs = None
-        max_exp = max_err = None
-        if n_exp:
-            spectrum = lyapunov_spectrum(point, k=n_exp, transient=0,
-                                         initial_state=sim.strobe.state[-1],
-                                         cycles=spec.lyapunov_cycles, tangent_transient=10)
-            exps, errs = spectrum.exponents, spectrum.errors
-            max_exp, max_err = float(exps[0]), float(errs[0])
-        imp = sim.impacts
-        if spec.classify == "full":
-            regime = classify(point)
-            if exps is None and regime.max_exponent is not None:
-                max_exp, max_err = regime.max_exponent, regime.max_exponent_error
-            transient_used = regime.transient_used
-        else:
-            weights = length_weights(point, sim.state_names)  # rotations as lengths
-            regime = classify_sequence(
-                sim.strobe.state * weights, imp.cycle, imp.phase, imp.velocity, imp.labels,
-                max_period=max(1, sim.record // 2), tol=spec.window_tol,
-                exponent=None if exps is None else float(exps[0]),
-                exponent_error=None if errs is None else float(errs[0]),
-            )
-            transient_used = sim.transient
-        stats = sim.stats
-        return PointResult(
-            index=index, status=1, message="", regime=regime.regime,
-            impacts_per_period=_int_or(regime.impacts_per_period),
-            period_cycles=_int_or(regime.period_cycles),
-            strobe_mismatch=float(regime.strobe_mismatch),
-            zero_one=_float_or(regime.zero_one),
-            max_exponent=_float_or(max_exp), max_exponent_error=_float_or(max_err),
-            transient_used=int(transient_used),
-            corner_sequence=" ".join(regime.corner_sequence),
-            exponents=exps, final_state=sim.strobe.state[-1].copy(),
-            steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
-            wall_s=time.perf_counter() - started,
-            impacts={"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
-                     "corner": imp.corner.astype(np.int8),
-                     "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
-                     "duration": imp.duration},
-            strobe=sim.strobe.state,
-        )
-    except (SimulationError, SceneError, ValueError, FloatingPointError, ZeroDivisionError,
-            OverflowError) as exc:
-        return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
-
-
-def _failed_point(index: int, n_state: int, message: str, started: float) -> PointResult:
-    empty = np.zeros(0)
-    return PointResult(
-        index=index, status=2, message=message.splitlines()[0] if message else "failed",
-        regime="failed", impacts_per_period=-1, period_cycles=-1, strobe_mismatch=np.nan,
-        zero_one=np.nan, max_exponent=np.nan, max_exponent_error=np.nan, transient_used=-1,
-        corner_sequence="", exponents=None,
-        final_state=np.full(n_state, np.nan), steps=0, rejected=0, rhs_evals=0,
-        wall_s=time.perf_counter() - started,
-        impacts={"time": empty, "phase": empty, "velocity": empty,
-                 "corner": np.zeros(0, dtype=np.int8), "peak_penetration": empty,
-                 "peak_force": empty, "duration": empty},
-        strobe=np.zeros((0, n_state)),
-    )
-
-
-def _int_or(value, default: int = -1) -> int:
-    return default if value is None else int(value)
-
-
-def _float_or(value, default: float = np.nan) -> float:
-    return default if value is None else float(value)

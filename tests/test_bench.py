@@ -11,13 +11,17 @@ import json
 import numpy as np
 import pytest
 
-from chaospound.bench import RUNS, numba_fun, python_fun, python_rhs
+from chaospound.bench import RUNS, load_python_twin, numba_fun
 from chaospound.cli import main
 from chaospound.kernels.contact import EPS_SERIES
 from chaospound.kernels.models import contact_ends, rhs
 from chaospound.kernels.params import MODEL_DIMS, PAIR, TOWER_WALL, TOWERS, WALL
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate
+
+#: the pure-Python equations of the scipy baseline (benchmarks/python_twin.py)
+python_rhs = load_python_twin().python_rhs
+python_fun = load_python_twin().python_fun
 
 N_STATES = 400
 SHORT = ["--transient", "2", "--record", "1"]
@@ -136,6 +140,18 @@ def test_bench_cli_text_without_subprocess(capsys):
     assert code == 0, err
     assert "scene wall (wall, 2 states)" in out
     assert "solve_ivp RK45, Python rhs" in out and "CLI end to end" not in out
+
+
+def test_bench_cli_without_the_python_twin(capsys, monkeypatch):
+    """An installed package has no benchmarks/: the Python-rhs run is reported missing."""
+    import chaospound.bench
+
+    monkeypatch.setattr(chaospound.bench, "load_python_twin", lambda: None)
+    code = main(["bench", "--preset", "wall", *SHORT, "--repeats", "1", "--no-cli"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "solve_ivp RK45, Python rhs: not run, " in out and "python_twin.py" in out
+    assert "solve_ivp RK45, numba rhs" in out and "x wall vs Python rhs" not in out
 
 
 def test_bench_cli_rejects_zero_repeats(capsys):

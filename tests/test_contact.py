@@ -10,13 +10,34 @@ from chaospound.kernels.contact import (
     line_contact,
     line_potential,
     moments,
-    moments_reference,
 )
 from chaospound.kernels.models import contact_forces, contact_potential
 from chaospound.kernels.params import TOWERS
 from chaospound.scene import load_preset
 
 RATIOS = [1.0, 0.999999, 0.9, 0.7, 0.5, 0.3, 0.1, 1e-3, 1e-6, 1e-9, 1e-12]
+
+
+def moments_reference(j: float, d_lo: float, d_hi: float, dps: int = 40) -> np.ndarray:
+    """High-precision moments M0, M1, M2 by mpmath quadrature."""
+    import mpmath
+
+    with mpmath.workdps(dps):
+        lo = mpmath.mpf(d_lo)
+        hi = mpmath.mpf(d_hi)
+
+        def pen(s):
+            d = lo + (hi - lo) * s
+            return d**j if d > 0 else mpmath.mpf(0)
+
+        points = [0, 1]
+        if (lo > 0) != (hi > 0):
+            points = [0, lo / (lo - hi), 1]
+        res = [
+            mpmath.quad(lambda s, k=k: pen(s) * (s - mpmath.mpf(1) / 2) ** k, points)
+            for k in range(3)
+        ]
+        return np.array([float(v) for v in res])
 
 
 def _check(j, d_lo, d_hi, rtol0=2e-15, rtol12=5e-14):

@@ -32,7 +32,6 @@ from chaospound.kernels.params import (
     PAIR,
     T_CX,
     T_MU,
-    T_OM,
     T_OM2,
     TOWER_A,
     TOWER_B,
@@ -56,8 +55,7 @@ def _params():
     p[P_GAP] = 1e6
     p[P_BETA] = 1000.0
     p[P_CHI] = 1.5
-    for base, om, om2, mu, cx in TOWER_DATA:
-        p[base + T_OM] = om
+    for base, _om, om2, mu, cx in TOWER_DATA:
         p[base + T_OM2] = om2
         p[base + T_MU] = mu
         p[base + T_CX] = cx

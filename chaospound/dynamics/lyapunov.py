@@ -97,10 +97,6 @@ class Spectrum:
     def kaplan_yorke(self) -> float:
         return kaplan_yorke(self.exponents)
 
-    @property
-    def is_full(self) -> bool:
-        return self.exponents.shape[0] == self.history.shape[1] and self.trace is not None
-
 
 @dataclass(frozen=True)
 class LargestExponent:

@@ -19,8 +19,8 @@ import numpy as np
 from ..kernels import integrate as kin
 from ..kernels.params import P_PHASE0
 from ..scene import Scene
-from ..simulate import Simulation, _raise_on_failure, simulate
-from .system import System
+from ..simulate import Simulation, simulate
+from .system import System, raise_on_failure
 
 __all__ = ["Section", "impact_section", "stroboscopic_section"]
 
@@ -196,7 +196,7 @@ def _system_section(system: System, phase: float, transient: int | None, cycles:
         system.restart_at_kinks, 0, strobe, np.zeros((1, n + 1)),
         np.zeros((0, kin.N_IMP_FIELDS)), np.zeros((0, n)), stats, np.zeros((0, 0)),
     )  # fmt: skip
-    _raise_on_failure(int(stats[kin.ST_STATUS]), stats, clock, period, system.max_steps, y)
+    raise_on_failure(int(stats[kin.ST_STATUS]), stats, clock, period, system.max_steps, y)
     k = np.arange(transient, transient + cycles + 1)
     return Section(
         kind=STROBOSCOPIC,

@@ -36,7 +36,12 @@ from ..kernels.params import (
 from ..kernels.rk import METHOD_NAMES
 from ..scene import STATE_NAMES, Scene
 
-__all__ = ["System", "advance", "custom_system", "duffing", "lorenz"]
+__all__ = ["SimulationError", "System", "advance", "custom_system", "duffing", "lorenz",
+           "raise_on_failure"]
+
+
+class SimulationError(RuntimeError):
+    """A run that could not finish (step budget, step-size underflow, NaN)."""
 
 
 @dataclass(frozen=True)
@@ -313,7 +318,22 @@ def advance(system: System, state: np.ndarray, cycles: int, *, model_id: int | N
                       system.restart_at_kinks, 0, strobe, traj, imp, imp_state, stats, log)
     status = int(stats[kin.ST_STATUS])
     if status != kin.STATUS_OK:
-        from ..simulate import _raise_on_failure
-
-        _raise_on_failure(status, stats, clock, system.period, system.max_steps, y)
+        raise_on_failure(status, stats, clock, system.period, system.max_steps, y)
     return y, clock, stats
+
+
+def raise_on_failure(status, stats, clock, period, max_steps, y) -> None:
+    """Raise :class:`SimulationError` with a one-line account of a failed kernel status."""
+    if status == kin.STATUS_OK:
+        return
+    where = f"at cycle {int(clock[0])}, t = {clock[0] * period + clock[1]:.6g}"
+    done = f"{int(stats[kin.ST_ACCEPTED])} steps accepted, {int(stats[kin.ST_REJECTED])} rejected"
+    if status == kin.STATUS_MAX_STEPS:
+        msg = (f"step budget max_steps = {max_steps} exhausted {where} ({done}); "
+               "raise max_steps or loosen rtol")
+    elif status == kin.STATUS_STEP_UNDERFLOW:
+        msg = (f"step size fell below round-off {where} ({done}, last h = {clock[2]:.3g}); "
+               "the contact is too stiff for this tolerance")
+    else:
+        msg = f"state became non-finite {where} ({done})"
+    raise SimulationError(msg)

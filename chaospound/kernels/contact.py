@@ -11,7 +11,7 @@ over the rest overlap ``[y_c - L/2, y_c + L/2]``. With ``s = (y - y_lo) / L`` in
 with ``d(s) = d_lo + (d_hi - d_lo) s``. The potential uses ``j = chi + 1``, the
 forces ``j = chi`` and the force Jacobian ``j = chi - 1``.
 
-Two regimes keep the moments accurate to a few ulps:
+Three regimes keep the moments accurate to a few ulps:
 
 * nearly parallel faces in full contact (``|eps| < EPS_SERIES`` with
   ``eps = (d_hi - d_lo) / (d_hi + d_lo)``): binomial series in eps about the mean
@@ -222,25 +222,3 @@ def line_contact_gradient(d_lo, d_hi, half_length, beta, chi):
     length = 2.0 * half_length
     scale = beta * chi
     return scale * n0, scale * length * n1, scale * length * n1, scale * length * length * n2
-
-
-def moments_reference(j: float, d_lo: float, d_hi: float, dps: int = 40) -> np.ndarray:
-    """High-precision moments by mpmath quadrature (tests and references only)."""
-    import mpmath
-
-    with mpmath.workdps(dps):
-        lo = mpmath.mpf(d_lo)
-        hi = mpmath.mpf(d_hi)
-
-        def pen(s):
-            d = lo + (hi - lo) * s
-            return d**j if d > 0 else mpmath.mpf(0)
-
-        points = [0, 1]
-        if (lo > 0) != (hi > 0):
-            points = [0, lo / (lo - hi), 1]
-        res = [
-            mpmath.quad(lambda s, k=k: pen(s) * (s - mpmath.mpf(1) / 2) ** k, points)
-            for k in range(3)
-        ]
-        return np.array([float(v) for v in res])

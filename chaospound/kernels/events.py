@@ -3,8 +3,12 @@
 The event functions are the penetrations at the two ends of the contact line,
 ``d_lo(t)`` and ``d_hi(t)``; their sign changes are the force's kinks (contact
 onset and release of an end). Inside one step the state is the step's
-interpolant ``y(t + theta h)``; roots in theta are refined by the Illinois
-variant of regula falsi, safeguarded by bisection, to :data:`TIME_TOL` in time.
+interpolant ``y(t + theta h)``; a penetration's root in theta is refined by
+Newton's method on the interpolant (its rate is the derivative) to
+:data:`TIME_TOL` in time, and the other quantities (the rates, whose roots
+are extrema), as well as any Newton iterate that leaves the bracket or fails
+to halve it, by the Illinois variant of regula falsi safeguarded by
+bisection (:func:`locate_root`).
 
 Grazes (an end that approaches, touches and leaves inside one step, with no
 sign change at the step ends) are found from the rates: a rate that turns

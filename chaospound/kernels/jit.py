@@ -16,12 +16,17 @@ chain of calls that each pass three arrays field by field.
 (:func:`chaospound.kernels.integrate.run_cycles`,
 :func:`chaospound.kernels.models.jacobian`) and so need the runtime.
 
-Measured on fig3a (``benchmarks/bench_simulate.py``, rtol 1e-6), the three
-together took the steady run from 1.15 to 0.54 microseconds per step; all of
-them cache their machine code on disk (``__pycache__``).
+All three cache their machine code on disk (``__pycache__``, or
+``NUMBA_CACHE_DIR``; :mod:`.cache` clears that cache when a kernel module
+changes). What they cost and save per step is measured by
+``benchmarks/bench_simulate.py`` (results/bench_simulate.json).
 """
 
 from numba import njit
+
+from .cache import invalidate_stale_cache
+
+invalidate_stale_cache()  # before any kernel is defined, so before any is loaded
 
 kernel = njit(cache=True, _nrt=False, error_model="numpy")
 inline = njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)

@@ -79,8 +79,8 @@ def rhs_grounded(model, t, y, p, ug, vg, out):
 
     Lets a stepper that evaluates twice at one time (Dormand-Prince's last
     stage and its FSAL stage) compute the sine and cosine once. One out-of-line
-    copy with the model bodies inlined: inlining it into each of the seven
-    Dormand-Prince stages saved 6 % of a step but doubled the compile time.
+    copy with the model bodies inlined, not inlined itself into each of the
+    seven Dormand-Prince stages, which would double the compile time.
     """
     if model >= TANGENT:
         _rhs_tangent(model - TANGENT, t, y, p, ug, vg, out)

@@ -49,8 +49,8 @@ SHIFT_MAX = 0.3  #: |x| up to which sin/cos(x) come from the Taylor series below
 # Taylor coefficients (-1)^k / (2k+1)! and (-1)^k / (2k)!: the truncation
 # error at |x| = SHIFT_MAX is below 1e-19, so sin x and cos x equal the
 # library's to rounding. Products only: without fastmath a division by a
-# constant stays a division, and the 13 divisions of a nested form sat on the
-# critical path of every Runge-Kutta stage (~120 ns of a 300 ns step).
+# constant stays a division, and the 13 divisions of a nested form would sit
+# on the critical path of every Runge-Kutta stage.
 _S1 = -1.0 / 6.0
 _S2 = 1.0 / 120.0
 _S3 = -1.0 / 5040.0

@@ -83,20 +83,8 @@ CASH_KARP_TINY = 1.0e-30
 ERR_FLOOR = 1.0e-4  #: floor of the previous error in the PI controller (dopri5 FACOLD)
 
 # ----------------------------------------------------- Dormand-Prince 5(4)
-# Dormand & Prince (1980); rows/columns as in scipy.integrate.RK45.
-DOPRI5_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0])
-DOPRI5_A = np.array([
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [1 / 5, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [3 / 40, 9 / 40, 0.0, 0.0, 0.0, 0.0],
-    [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0, 0.0],
-    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0, 0.0],
-    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0.0],
-])
-DOPRI5_B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84])
-#: 5th minus 4th-order weights; the 7th entry multiplies f_new (FSAL stage)
-DOPRI5_E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525,
-                     1 / 40])
+# Dormand & Prince (1980); rows/columns as in scipy.integrate.RK45. The tableau
+# (c, A, b, e) is written out as scalars before :func:`dopri5_step`.
 #: Shampine's 4th-order continuous extension (scipy RK45.P, Hairer dopri5 D1..D7)
 DOPRI5_P = np.array([
     [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
@@ -353,8 +341,8 @@ def carried_step(method, model, t, h, y, f0, p, rtol, atol, K, y_new, f_new, sin
     cos1)`` with the phase at ``t + h`` by angle addition. DOPRI5 evaluates its
     stages from that phase (no library sine in the step); the other methods
     step as :func:`rk_step` does. A driver resets the phase from the library
-    sine at every section, so it never drifts. Inlined into its caller: as an
-    out-of-line call returning a tuple it cost 6 % of the fig3a run.
+    sine at every section, so it never drifts. Inlined into its caller, so
+    that no tuple is returned through an out-of-line call in the step loop.
     """
     if method == DOPRI5:
         return dopri5_step(model, t, h, y, f0, p, rtol, atol, K, y_new, f_new, sin0, cos0)
@@ -680,21 +668,6 @@ def _stage(model, t, h, y, p, a, c, s, K, scratch):
                 acc += a[s, j] * K[j, i]
         scratch[i] = y[i] + h * acc
     rhs(model, t + c[s] * h, scratch, p, K[s])
-
-
-@kernel
-def _rms_error(h, y, y_new, K, e, rtol, atol):
-    """RMS of ``h sum_j e_j K[j] / (atol + rtol max(|y|, |y_new|))``."""
-    n = y.shape[0]
-    total = 0.0
-    for i in range(n):
-        acc = 0.0
-        for j in range(e.shape[0]):
-            if e[j] != 0.0:
-                acc += e[j] * K[j, i]
-        scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
-        total += (h * acc / scale) ** 2
-    return math.sqrt(total / n)
 
 
 @kernel
