@@ -49,6 +49,7 @@ __all__ = [
     "add_scene_options",
     "build_parser",
     "main",
+    "note_sweep_overrides",
     "scene_from_args",
     "write_json_file",
 ]
@@ -208,6 +209,8 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
     if path is not None and not os.path.exists(path):
         raise CliError(f"scene file {_path(path)} not found")
     scene = load_preset(preset) if preset is not None else load_scene(path)
+    if path is not None:
+        _note_file_defaults(path, scene)
     overrides = [
         f"{name}={getattr(args, name)}"
         for name in RUN_OVERRIDES
@@ -215,6 +218,71 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
     ]
     assignments = list(args.assignments) + overrides
     return scene.with_assignments(assignments) if assignments else scene
+
+
+#: the defaults named when a scene file sets no parameter
+FILE_DEFAULTS_SHOWN = ("period_ratio", "freq_ratio", "mass_ratio", "gap", "beta", "chi",
+                       "length_A", "width_ratio_A", "zeta_x_A", "method", "rtol", "transient",
+                       "record")
+
+
+def _note_file_defaults(path: str, scene: Scene) -> None:
+    """A scene file that sets no parameter (e.g. an empty file) runs the default scene:
+    say so on stderr, with the main defaults, instead of running silently."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+        import tomli as tomllib
+    try:
+        with open(path, "rb") as stream:
+            data = tomllib.load(stream)
+    except (OSError, ValueError):
+        return  # load_scene read it already; nothing to add
+    if any(isinstance(table, dict) and table for table in data.values()):
+        return
+    values = scene.to_dict()
+    shown = ", ".join(f"{name.removesuffix('_A').replace('zeta_x', 'zeta')} = {values[name]:g}"
+                      if isinstance(values[name], float | int) else f"{name} = {values[name]}"
+                      for name in FILE_DEFAULTS_SHOWN)
+    _note(f"scene file {path!r} sets no parameter: running the default scene ({shown}; "
+          "every default: 'chaospound params')")
+
+
+def note_sweep_overrides(args: argparse.Namespace, scene: Scene | None = None) -> str | None:
+    """Say on stderr when a swept parameter is also given by --set (or a run option).
+
+    ``chaospound sweep --set gap=2 --param gap=1,2`` sweeps gap over 1, 2: the sweep
+    overrides the --set. Call after the scene is built; the swept names are those of
+    ``args.params`` (``--param NAME=GRID``), else of the scene's [sweep] table.
+
+    Returns
+    -------
+    str or None
+        The note written (one line), or None when nothing is overridden.
+    """
+    from chaospound.scene import SHORTHANDS
+
+    params = list(getattr(args, "params", None) or [])
+    swept = [text.split("=", 1)[0].strip() for text in params]
+    if not swept and scene is not None:
+        swept = [name for name, _ in scene.sweep]
+    swept = [name for name in swept if name]
+    given = [(f"--set {text}", text.split("=", 1)[0].strip())
+             for text in getattr(args, "assignments", None) or [] if "=" in text]
+    given += [(f"--{name} {getattr(args, name)}", name) for name in RUN_OVERRIDES
+              if getattr(args, name, None) is not None]
+    overridden = []
+    for option, name in given:
+        covered = {name, *SHORTHANDS.get(name, ())}
+        hits = [s for s in swept if covered & {s, *SHORTHANDS.get(s, ())}]
+        if hits:
+            overridden.append(f"{option} (swept: {', '.join(hits)})")
+    if not overridden:
+        return None
+    message = (f"the sweep overrides {'; '.join(overridden)}: each point takes the "
+               "swept value")
+    _note(message)
+    return message
 
 
 def write_json_file(document: object, path: str, *, overwrite: bool = False) -> None:
@@ -324,7 +392,7 @@ def _add_simulate(commands: argparse._SubParsersAction) -> None:
     out.add_argument("--json", action="store_true", help="print one JSON document only")
     out.add_argument(
         "--trajectory",
-        type=_count,
+        type=_count0,
         default=0,
         metavar="N",
         help="dense samples per cycle over the record window (JSON 'trajectory')",
@@ -448,7 +516,7 @@ def _add_bench(commands: argparse._SubParsersAction) -> None:
     add_scene_options(parser)
     group = parser.add_argument_group("benchmark")
     group.add_argument(
-        "--repeats", type=_count, default=5, metavar="N",
+        "--repeats", type=_count0, default=5, metavar="N",
         help="timing rounds (5): chaospound 6x around one run of each solve_ivp variant;"
         " the best of each counts",
     )
@@ -490,14 +558,14 @@ def _add_lyapunov(commands: argparse._SubParsersAction) -> None:
     add_scene_options(parser)
     group = parser.add_argument_group("lyapunov")
     group.add_argument(
-        "--k", type=_count, default=None, metavar="K", help="number of exponents (default: all)"
+        "--k", type=_count0, default=None, metavar="K", help="number of exponents (default: all)"
     )
     group.add_argument(
-        "--cycles", type=_count, default=400, metavar="N", help="excitation cycles averaged (400)"
+        "--cycles", type=_count0, default=400, metavar="N", help="excitation cycles averaged (400)"
     )
     group.add_argument(
         "--tangent-transient",
-        type=_count,
+        type=_count0,
         default=20,
         metavar="N",
         help="cycles discarded while the tangent vectors align (20)",
@@ -695,24 +763,24 @@ def _add_classify(commands: argparse._SubParsersAction) -> None:
     group = parser.add_argument_group("classification")
     group.add_argument(
         "--max-transient",
-        type=_count,
+        type=_count0,
         default=2000,
         metavar="N",
         help="longest transient in cycles (2000); --transient is the shortest (40)",
     )
     group.add_argument(
-        "--max-period", type=_count, default=16, metavar="P", help="longest period searched (16)"
+        "--max-period", type=_count0, default=16, metavar="P", help="longest period searched (16)"
     )
     group.add_argument(
         "--window",
-        type=_count,
+        type=_count0,
         default=None,
         metavar="N",
         help="record window in cycles (default max(4 max-period, 32))",
     )
     group.add_argument(
         "--lyapunov-cycles",
-        type=_count,
+        type=_count0,
         default=200,
         metavar="N",
         help="cycles averaged for the largest exponent when there is no period (200)",
@@ -1087,7 +1155,7 @@ def _sweep_figure(sweep, branches: Sequence[str]):
         axes = fig.subplots(1, cols, squeeze=False, sharex=True, sharey=True)[0]
         for ax, branch in zip(axes, branches, strict=True):
             _regime_map(ax, sweep, branch)
-            ax.set_title(f"{branch}: {done[branch]} of {total} points")
+            ax.set_title(_branch_title(branch, done[branch], total))
         fig.suptitle(f"{name}: regimes over {' x '.join(sweep.parameters)} ({sweep.meta['model']} "
                      "model)")
         return fig
@@ -1108,9 +1176,18 @@ def _sweep_figure(sweep, branches: Sequence[str]):
             ax=list(grid[:, j]),
             parameter_label=label,
         )
-        grid[0, j].set_title(f"{branch}: {done[branch]} of {total} points")
+        grid[0, j].set_title(_branch_title(branch, done[branch], total))
     fig.suptitle(f"{name}: impact velocity against {parameter} ({sweep.meta['model']} model)")
     return fig
+
+
+def _branch_title(branch: str, done: int, total: int) -> str:
+    """Panel title: points done, with the continuation direction ("fresh" is internal:
+    each point from the scene's initial state, so no name)."""
+    points = f"{done} of {total} points"
+    if branch == "fresh":
+        return points
+    return f"{branch} continuation: {points}"
 
 
 def _regime_map(ax, sweep, branch: str) -> None:
@@ -1179,7 +1256,19 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _count(text: str) -> int:
-    """argparse type: an integer >= 0."""
+    """argparse type: an integer >= 1 (--workers, --chunk: 0 and -2 get the same words)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be an integer >= 1")
+    return value
+
+
+def _count0(text: str) -> int:
+    """argparse type: an integer >= 0 (counts where 0 means none, or that the command
+    checks itself to name the option in its message)."""
     try:
         value = int(text)
     except ValueError:
@@ -1218,6 +1307,12 @@ def _fail(message: str, code: int) -> int:
     sys.stderr.write(f"{PROG}: error: {message}\n")
     sys.stderr.flush()
     return code
+
+
+def _note(message: str) -> None:
+    """One informational line on stderr (``chaospound: note: ...``); stdout stays clean."""
+    sys.stderr.write(f"{PROG}: note: {' '.join(message.split())}\n")
+    sys.stderr.flush()
 
 
 def _emit(text: str) -> None:

@@ -140,6 +140,8 @@ def test_bench_cli_text_without_subprocess(capsys):
     assert code == 0, err
     assert "scene wall (wall, 2 states)" in out
     assert "solve_ivp RK45, Python rhs" in out and "CLI end to end" not in out
+    # the goals are explained to a user, not referred to an issue tracker
+    assert "issue" not in out and "speed goals of chaospound" in out and "(goal <=" in out
 
 
 def test_bench_cli_without_the_python_twin(capsys, monkeypatch):

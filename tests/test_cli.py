@@ -374,3 +374,72 @@ def test_non_finite_numbers_become_null(tmp_path):
     target = tmp_path / "nan.json"
     cli.write_json_file({"a": [1.0, float("nan")], "b": float("inf")}, str(target))
     assert json.loads(target.read_text(encoding="utf-8")) == {"a": [1.0, None], "b": None}
+
+
+# ======================================= a newcomer's small inconsistencies (issue 18)
+@pytest.mark.parametrize("value", ["0", "-2", "two"])
+def test_workers_below_one_gets_one_message(capsys, tmp_path, value):
+    """--workers 0 and --workers -2 are refused with the same words."""
+    code, out, err = run(capsys, "sweep", "--preset", "wall", "--param", "gap=1,2", "-o",
+                         str(tmp_path / "x.h5"), "--workers", value)
+    assert_one_line_error(code, out, err, "--workers", "must be an integer >= 1")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_empty_scene_file_says_which_defaults_it_runs(capsys, tmp_path):
+    path = tmp_path / "empty.toml"
+    path.write_text("", encoding="utf-8")
+    code, out, err = run(capsys, "simulate", str(path), *SHORT, "--json")
+    assert code == 0
+    [line] = err.splitlines()
+    assert line.startswith("chaospound: note: ") and "empty.toml" in line
+    assert "sets no parameter" in line and "default scene" in line
+    for shown in ("period_ratio = 0.7", "freq_ratio = 1.5", "gap = 1", "beta = 1000",
+                  "method = dopri5", "rtol = 1e-05", "transient = 40"):
+        assert shown in line
+    assert json.loads(out)["scene"] == {**Scene().with_params(transient=5, record=2).to_dict()}
+    # a file that sets something runs without the note
+    path.write_text("[structure]\ngap = 0.5\n", encoding="utf-8")
+    code, out, err = run(capsys, "simulate", str(path), *SHORT, "--json")
+    assert code == 0 and err == ""
+
+
+@pytest.mark.parametrize(("options", "expected"), [
+    (["--set", "gap=2", "--param", "gap=1,2"], "--set gap=2 (swept: gap)"),
+    (["--set", "zeta=0.1", "--param", "zeta_x_A=0.01,0.02"], "--set zeta=0.1 (swept: zeta_x_A)"),
+    (["--set", "beta=2000", "--rtol", "1e-6", "--param", "rtol=1e-5,1e-6"],
+     "--rtol 1e-6 (swept: rtol)"),
+    (["--set", "gap=2", "--param", "period_ratio=0.5,0.6"], None),
+])
+def test_note_sweep_overrides(capsys, options, expected):
+    """The helper _cmd_sweep calls: one note on stderr when --set names a swept parameter."""
+    args = cli.build_parser().parse_args(["sweep", "--preset", "wall", *options, "-o", "x.h5"])
+    note = cli.note_sweep_overrides(args, cli.scene_from_args(args))
+    out, err = capsys.readouterr()
+    assert out == ""
+    if expected is None:
+        assert note is None and err == ""
+        return
+    assert expected in note and "overrides" in note
+    assert err == f"chaospound: note: {note}\n"
+    assert "beta" not in note
+
+
+def test_note_sweep_overrides_reads_the_scene_sweep_table(capsys):
+    args = cli.build_parser().parse_args(["sweep", "--preset", "fig4", "--set",
+                                          "period_ratio=0.9", "-o", "x.h5"])
+    note = cli.note_sweep_overrides(args, cli.scene_from_args(args))
+    assert "--set period_ratio=0.9 (swept: period_ratio)" in note
+
+
+def test_plot_titles_do_not_show_the_internal_branch_name(capsys, tmp_path):
+    path = tmp_path / "wall.h5"
+    code, _, err = run(capsys, "sweep", "--preset", "wall", *SHORT, "--param",
+                       "period_ratio=0.5:1.0#3", "-o", str(path), "--quiet")
+    assert code == 0, err
+    from chaospound.store import open_sweep
+
+    fig = cli._sweep_figure(open_sweep(path), ["fresh"])
+    titles = [ax.get_title() for ax in fig.axes] + [fig.get_suptitle()]
+    assert not any("fresh" in title for title in titles), titles
+    assert "3 of 3 points" in titles[0]
