@@ -376,8 +376,46 @@ def _cmd_params(args: argparse.Namespace) -> int:
             raise CliError(f"unknown parameter {shorten(name, quote=True)} "
                            "(see 'chaospound params')")
     names = args.names or list(described)
-    _emit(_table(("parameter", "meaning"), [(n, described[n]) for n in names], "ll"))
+    defaults = parameter_defaults()
+    rows = [(n, defaults[n], described[n]) for n in names]
+    _emit(_table(("parameter", "default", "meaning; range"), rows, "lll"))
     return EXIT_OK
+
+
+#: parameters whose default is derived from others: what it follows
+_DERIVED_DEFAULTS = {
+    "mass_ratio": "auto: freq_ratio**2",
+    "gyration": "auto: sqrt((l^2+w^2)/12)",
+    "width": "width_ratio l",
+    "atol": "1e-3 rtol",
+}
+
+
+def parameter_defaults() -> dict[str, str]:
+    """Default of every flat parameter and shorthand, as shown by ``chaospound params``.
+
+    Values of the default scene (:class:`~chaospound.scene.Scene` ``()``); a default
+    that follows other parameters says what it follows and its default value, e.g.
+    ``"auto: freq_ratio**2 = 2.25"``. A shorthand shows the default of the names it sets.
+    """
+    from chaospound.scene import PARAMETERS, SHORTHANDS, Scene
+
+    values = Scene().to_dict()
+    out = {}
+    for name in PARAMETERS:
+        value = values[name]
+        if isinstance(value, bool):
+            shown = str(value).lower()
+        elif isinstance(value, float):
+            shown = f"{value:g}"
+        else:
+            shown = str(value)
+        rule = _DERIVED_DEFAULTS.get(name.removesuffix("_A").removesuffix("_B"))
+        out[name] = f"{rule} = {shown}" if rule else shown
+    out["model"] = "auto"  # to_dict gives the reduction used; the setting is auto
+    for short, names in SHORTHANDS.items():
+        out[short] = out[names[0]]
+    return out
 
 
 # ============================================================= simulate

@@ -319,6 +319,26 @@ def test_params_lists_every_parameter(capsys):
     assert code == 0 and "must be > 0" in out and len(out.splitlines()) == 2
 
 
+def test_params_shows_each_default(capsys):
+    """Each parameter's default beside its meaning and range, derived ones say what
+    they follow."""
+    code, out, err = run(capsys, "params")
+    assert code == 0 and err == ""
+    header, *lines = out.splitlines()
+    assert header.split()[:2] == ["parameter", "default"]
+    rows = {line.split()[0]: line.split(None, 1)[1] for line in lines}
+    assert set(PARAMETERS) <= set(rows)
+    defaults = Scene().to_dict()
+    for name in ("period_ratio", "gap", "beta", "chi", "length_A", "rtol", "transient"):
+        assert rows[name].split()[0] == f"{defaults[name]:g}", name
+    assert rows["method"].startswith("dopri5 ") and rows["model"].startswith("auto ")
+    assert rows["mass_ratio"].startswith("auto: freq_ratio**2 = 2.25 ")
+    assert rows["atol"].startswith("1e-3 rtol = 1e-08 ")
+    assert rows["zeta"].startswith("0.03 ")
+    code, out, _ = run(capsys, "params", "gap")
+    assert out.splitlines()[1].split()[:2] == ["gap", "1"] and "must be >= 0" in out
+
+
 # ============================================================= --output
 def test_output_writes_the_same_json(capsys, tmp_path):
     target = tmp_path / "run.json"
