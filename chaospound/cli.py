@@ -71,6 +71,20 @@ EXIT_BROKEN_PIPE = 141  #: stdout closed early (128 + SIGPIPE), e.g. ``| head``
 RUN_OVERRIDES = ("transient", "record", "method", "rtol", "atol", "phase")
 #: columns of the readable impact table
 IMPACT_COLUMNS = ("#", "cycle", "phase", "velocity", "corner", "peak pen", "peak force", "duration")
+#: the units row under the impact table's header (MODEL.md section 1, as UNITS)
+IMPACT_UNITS = ("", "", "of T", "A_g omega_Ax", "", "A_g", "A_g k_Ax", "1/omega_Ax")
+#: the ``units`` object of every JSON document (values as chaospound.store.UNITS, the
+#: sweep file's)
+UNITS = {
+    "time": "normalised, t = tau omega_Ax",
+    "length": "A_g (ground displacement amplitude)",
+    "velocity": "A_g omega_Ax",
+    "force": "A_g k_Ax",
+    "exponents": "per unit normalised time (multiply by the period T for per cycle)",
+    "phase": "fraction of the excitation period, in [0, 1)",
+}
+#: units of the wall-clock times in the JSON documents (``wall_s``)
+WALL_UNITS = {"wall_s": "seconds (wall clock)"}
 
 
 class CliError(ValueError):
@@ -463,7 +477,7 @@ def _run_simulation(scene: Scene, samples_per_cycle: int) -> Simulation:
 
 
 def _simulation_document(sim: Simulation) -> dict:
-    document = sim.to_json_dict()
+    document = _with_units(sim.to_json_dict())
     if sim.trajectory is not None:
         document["trajectory"] = {
             "time": sim.trajectory.time.tolist(),
@@ -509,7 +523,7 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
             )
             for i, label in enumerate(imp.labels)
         ]
-        blocks.append(_table(IMPACT_COLUMNS, rows, "rrrrlrrr"))
+        blocks.append(_table(IMPACT_COLUMNS, [IMPACT_UNITS, *rows], "rrrrlrrr"))
     else:
         blocks.append("no impacts in the record window")
     blocks.append(_table(None, _summary(sim, samples_per_cycle, output), "ll"))
@@ -525,7 +539,8 @@ def _summary(sim: Simulation, samples_per_cycle: int, output: str | None) -> lis
         ("impacts per cycle", f"{len(imp) / sim.record:.4g} ({len(imp)} in {sim.record} cycles)"),
         (
             "velocity",
-            f"min {imp.velocity.min():.6g}, max {imp.velocity.max():.6g}" if len(imp) else "-",
+            f"min {imp.velocity.min():.6g}, max {imp.velocity.max():.6g} (A_g omega_Ax)"
+            if len(imp) else "-",
         ),
         (f"corners, cycle {last_cycle}", " ".join(last) if last else "none"),
         (
@@ -574,7 +589,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         args.preset = "fig3a"
     scene = scene_from_args(args)
     result = run_benchmark(scene, repeats=args.repeats, cli=not args.no_cli)
-    _emit(_json_text(result) if args.json else format_benchmark(result))
+    _emit(_json_text(_with_units(result)) if args.json else format_benchmark(result))
     return EXIT_OK
 
 
@@ -713,6 +728,7 @@ def _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
         "work": {"steps": spectrum.steps, "rhs_evals": spectrum.rhs_evals, "wall_s": wall},
         "scene": scene.to_dict(),
     }
+    _with_units(document)
     if two is not None:
         document["two_trajectory"] = {
             "exponent": two.exponent,
@@ -863,6 +879,7 @@ def _cmd_classify(args: argparse.Namespace) -> int:
     document = regime.to_json_dict()
     document["model"] = regime.evidence.get("model")
     document["scene"] = scene.to_dict()
+    _with_units(document)
     if args.json:
         _emit(_json_text(document))
     else:
@@ -1366,6 +1383,12 @@ def _silence_stdout() -> None:
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError):
         pass
+
+
+def _with_units(document: dict) -> dict:
+    """Add the ``units`` object (:data:`UNITS`, as in the sweep file) to a JSON document."""
+    document["units"] = {**UNITS, **WALL_UNITS}
+    return document
 
 
 def _json_text(document: object) -> str:

@@ -270,6 +270,10 @@ def test_readable_output_table_matches_json(capsys):
     assert "dopri5" in out and "rtol 1e-05" in out
     lines = out.splitlines()
     start = next(i for i, line in enumerate(lines) if line.split()[:2] == ["#", "cycle"])
+    # a units row under the header: velocity, peak penetration, force and duration
+    assert lines[start + 1].split() == ["of", "T", "A_g", "omega_Ax", "A_g", "A_g", "k_Ax",
+                                        "1/omega_Ax"]
+    start += 1
     rows = [line.split() for line in lines[start + 1 :] if line.strip()][: len(doc["impacts"])]
     assert len(rows) == len(doc["impacts"])
     for k, (row, impact) in enumerate(zip(rows, doc["impacts"], strict=True)):
@@ -463,3 +467,31 @@ def test_plot_titles_do_not_show_the_internal_branch_name(capsys, tmp_path):
     titles = [ax.get_title() for ax in fig.axes] + [fig.get_suptitle()]
     assert not any("fresh" in title for title in titles), titles
     assert "3 of 3 points" in titles[0]
+
+
+# ================================================================ units
+@pytest.mark.parametrize("argv", [
+    ["simulate", "--preset", "wall", *SHORT, "--json"],
+    ["lyapunov", "--preset", "wall", *SHORT, "--cycles", "10", "--json"],
+    ["classify", "--preset", "wall", "--transient", "5", "--max-transient", "20", "--json"],
+    ["bench", "--preset", "wall", *SHORT, "--repeats", "1", "--no-cli", "--json"],
+])
+def test_every_json_document_carries_units(capsys, argv):
+    """As the sweep file does: the units of lengths, velocities, forces, times, exponents."""
+    from chaospound.store import UNITS
+
+    code, out, err = run(capsys, *argv)
+    assert code == 0, err
+    units = json.loads(out)["units"]
+    assert {key: units[key] for key in UNITS} == UNITS
+    assert units["velocity"] == "A_g omega_Ax" and units["force"] == "A_g k_Ax"
+    assert units["wall_s"].startswith("seconds")
+
+
+def test_simulate_table_states_units(capsys):
+    code, out, err = run(capsys, "simulate", "--preset", "wall", *SHORT)
+    assert code == 0 and err == ""
+    velocity = next(line for line in out.splitlines() if line.startswith("velocity"))
+    assert velocity.endswith("(A_g omega_Ax)")
+    header = next(i for i, line in enumerate(out.splitlines()) if line.startswith("#"))
+    assert "A_g k_Ax" in out.splitlines()[header + 1]
