@@ -343,6 +343,31 @@ def check_output_path(path: str, *, overwrite: bool) -> None:
         raise CliError(f"output {_path(path)}: folder {_path(folder)} does not exist")
 
 
+def check_figure_path(path: str) -> None:
+    """Raise :class:`CliError` unless a figure can be drawn to ``path`` (before any work).
+
+    A figure is a derived product: an existing figure is redrawn (no --overwrite
+    needed). Refused: a directory, a missing folder, and an extension that is not a
+    figure format (so a data file such as .h5 or .json is never replaced by a figure).
+    """
+    from matplotlib.figure import Figure
+
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(path):
+        raise CliError(f"output {_path(path)} is a directory")
+    if not os.path.isdir(folder):
+        raise CliError(f"output {_path(path)}: folder {_path(folder)} does not exist")
+    extension = os.path.splitext(path)[1].lstrip(".").lower()
+    formats = Figure().canvas.get_supported_filetypes()
+    if extension and extension not in formats:
+        raise CliError(f"output {_path(path)}: .{shorten(extension)} is not a figure format "
+                       f"(use {', '.join('.' + f for f in FIGURE_FORMATS)})")
+
+
+#: figure formats named in help texts and messages (matplotlib writes more)
+FIGURE_FORMATS = ("png", "pdf", "svg")
+
+
 # ============================================================== presets
 def _add_presets(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
@@ -631,8 +656,9 @@ def _add_lyapunov(commands: argparse._SubParsersAction) -> None:
     )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print one JSON document only")
-    out.add_argument("--plot", metavar="FILE.png", help="write the convergence figure")
-    out.add_argument("--overwrite", action="store_true", help="replace an existing --plot file")
+    out.add_argument("--plot", metavar="FILE.png", help="write the convergence figure (.png, "
+                     ".pdf or .svg; an existing figure is redrawn)")
+    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
     parser.set_defaults(func=_cmd_lyapunov)
 
 
@@ -655,7 +681,7 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
             f"(the error bars use {LYAPUNOV_BLOCKS} blocks)"
         )
     if args.plot is not None:
-        check_output_path(args.plot, overwrite=args.overwrite)
+        check_figure_path(args.plot)
     # warm the jitted kernels up, so that the reported wall time is the work's
     lyapunov_spectrum(system, k=args.k, transient=0, tangent_transient=0, cycles=2, n_blocks=2)
     start = time.perf_counter()
@@ -683,7 +709,7 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
         )
         two_wall = time.perf_counter() - start
     if args.plot is not None:
-        _lyapunov_save_plot(spectrum, two, args.plot, overwrite=args.overwrite)
+        _lyapunov_save_plot(spectrum, two, args.plot)
     document = _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
     if args.json:
         _emit(_json_text(document))
@@ -692,12 +718,12 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _lyapunov_save_plot(spectrum, two, path: str, *, overwrite: bool) -> None:
+def _lyapunov_save_plot(spectrum, two, path: str) -> None:
     """Write the convergence figure atomically; file errors become CliError."""
     from chaospound.plot import plot_lyapunov_convergence, save
 
     fig = plot_lyapunov_convergence(spectrum, two)
-    check_output_path(path, overwrite=overwrite)
+    check_figure_path(path)
     try:
         save(fig, path)
     except OSError as exc:
@@ -842,8 +868,9 @@ def _add_classify(commands: argparse._SubParsersAction) -> None:
     group.add_argument("--no-01", action="store_true", help="skip the 0-1 test for chaos")
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print one JSON document only")
-    out.add_argument("--plot", metavar="FILE.png", help="write phase diagrams of the steady state")
-    out.add_argument("--overwrite", action="store_true", help="replace an existing --plot file")
+    out.add_argument("--plot", metavar="FILE.png", help="write phase diagrams of the steady "
+                     "state (.png, .pdf or .svg; an existing figure is redrawn)")
+    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
     parser.set_defaults(func=_cmd_classify)
 
 
@@ -864,7 +891,7 @@ def _cmd_classify(args: argparse.Namespace) -> int:
     if args.max_period < 1:
         raise CliError(f"--max-period {args.max_period}: must be an integer >= 1")
     if args.plot is not None:
-        check_output_path(args.plot, overwrite=args.overwrite)
+        check_figure_path(args.plot)
     regime = classify(
         scene,
         min_transient=shortest,
@@ -875,7 +902,7 @@ def _cmd_classify(args: argparse.Namespace) -> int:
         test01=not args.no_01,
     )
     if args.plot is not None:
-        _classify_save_plot(scene, regime, args.plot, overwrite=args.overwrite)
+        _classify_save_plot(scene, regime, args.plot)
     document = regime.to_json_dict()
     document["model"] = regime.evidence.get("model")
     document["scene"] = scene.to_dict()
@@ -887,7 +914,7 @@ def _cmd_classify(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _classify_save_plot(scene: Scene, regime, path: str, *, overwrite: bool) -> None:
+def _classify_save_plot(scene: Scene, regime, path: str) -> None:
     """Phase diagrams of the classified steady state (rerun at the classification's tolerances)."""
     from chaospound.plot import plot_phase_diagrams, save
     from chaospound.simulate import simulate
@@ -899,7 +926,7 @@ def _classify_save_plot(scene: Scene, regime, path: str, *, overwrite: bool) -> 
     run = simulate(scene, transient=regime.transient_used, record=record, samples_per_cycle=200)
     fig = plot_phase_diagrams(run)
     fig.suptitle(f"{fig.get_suptitle()}: {regime.label}")
-    check_output_path(path, overwrite=overwrite)
+    check_figure_path(path)
     try:
         save(fig, path)
     except OSError as exc:
@@ -1158,7 +1185,7 @@ def _add_plot(commands: argparse._SubParsersAction) -> None:
                         "the extension)")
     parser.add_argument("--branch", metavar="NAME",
                         help="only this branch (fresh, forward or backward; default: all)")
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing figure")
+    parser.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
     parser.set_defaults(func=_cmd_plot)
 
 
@@ -1172,10 +1199,10 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     output = args.output or os.path.splitext(args.sweep_file)[0] + ".png"
     if os.path.abspath(output) == os.path.abspath(args.sweep_file):
         raise CliError(f"output {_path(output)} is the sweep file itself")
-    check_output_path(output, overwrite=args.overwrite)
+    check_figure_path(output)
     branches = [args.branch] if args.branch is not None else list(sweep.branches)
     fig = _sweep_figure(sweep, branches)
-    check_output_path(output, overwrite=args.overwrite)
+    check_figure_path(output)
     try:
         save(fig, output)
     except OSError as exc:

@@ -335,3 +335,23 @@ def test_cli_lyapunov_plot_into_missing_folder(capsys, tmp_path):
         str(tmp_path / "no" / "lyap.png"),
     )
     assert code == 2 and out == "" and "does not exist" in err
+
+
+def test_cli_figures_are_redrawn_but_data_files_are_not_replaced(capsys, tmp_path):
+    """A figure is a derived product: --plot redraws an existing figure without
+    --overwrite; a data file (.json, .h5) is never replaced by a figure."""
+    target = tmp_path / "lyap.png"
+    target.write_bytes(b"an old figure")
+    argv = ["lyapunov", "--preset", "wall", "--transient", "5", "--cycles", "10"]
+    code, out, err = run_cli(capsys, *argv, "--plot", str(target))
+    assert code == 0, err
+    assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, out, err = run_cli(capsys, *argv, "--plot", str(target))  # again
+    assert code == 0 and err == "" and "wrote" in out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lyap.png"]
+    for name in ("run.json", "fig4.h5"):
+        data = tmp_path / name
+        data.write_text("results", encoding="utf-8")
+        code, out, err = run_cli(capsys, *argv, "--plot", str(data))
+        assert code == 2 and out == "" and "not a figure format" in err and name in err
+        assert data.read_text(encoding="utf-8") == "results"

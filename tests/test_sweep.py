@@ -489,8 +489,10 @@ def test_plot_command_writes_the_bifurcation_diagram(lyapunov_sweep, capsys):
     assert code == 0, err
     assert out.startswith(f"wrote {png}") and "bifurcation diagram" in out
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    # refused a second time without --overwrite
-    assert_one_line_error(*run(capsys, "plot", lyapunov_sweep), "exists", "--overwrite")
+    # a figure is derived: redrawn a second time, no --overwrite needed (issue 18)
+    png.write_bytes(b"stale")
+    code, out, err = run(capsys, "plot", lyapunov_sweep)
+    assert code == 0 and err == "" and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     code, out, err = run(capsys, "plot", lyapunov_sweep, "--branch", "backward", "-o",
                          png.with_name("backward.pdf"))
     assert code == 0 and png.with_name("backward.pdf").read_bytes()[:4] == b"%PDF"
