@@ -31,6 +31,8 @@ import math
 import os
 import sys
 import tempfile
+import threading
+import time
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, NoReturn
 
@@ -87,6 +89,16 @@ UNITS = {
 WALL_UNITS = {"wall_s": "seconds (wall clock)"}
 
 
+#: a status line appears once the work has taken this long (s)
+STATUS_DELAY_S = 2.0
+#: seconds between redraws of the status line
+STATUS_INTERVAL_S = 1.0
+#: what a first run's compilation of the kernels takes (s): 20-38 s measured on a fresh
+#: clone, 54 s on two busy cores
+COMPILE_ESTIMATE_S = "30-60"
+_COMMAND_START = time.perf_counter()  #: reset by main(): the whole command's start
+
+
 class CliError(ValueError):
     """Bad command-line input (exit code 2); the message is one line."""
 
@@ -107,6 +119,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         interrupted. Only ``python -m chaospound`` and the console script turn
         it into ``SystemExit``.
     """
+    global _COMMAND_START
+    _COMMAND_START = time.perf_counter()
     try:
         try:
             args = build_parser().parse_args(argv)
@@ -476,6 +490,9 @@ def _add_simulate(commands: argparse._SubParsersAction) -> None:
     )
     out.add_argument("--output", metavar="FILE.json", help="also write the JSON to this file")
     out.add_argument("--overwrite", action="store_true", help="replace an existing --output")
+    out.add_argument("--quiet", action="store_true",
+                     help="no status line on stderr (compiling, running; shown on a terminal "
+                     f"when the work takes more than {STATUS_DELAY_S:g} s)")
     parser.set_defaults(func=_cmd_simulate)
 
 
@@ -483,7 +500,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     if args.output is not None:
         check_output_path(args.output, overwrite=args.overwrite)
-    sim = _run_simulation(scene, args.trajectory)
+    _load_kernels(args.quiet)
+    cycles = f"{scene.run.transient} transient + {scene.run.record} recorded cycles"
+    with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet):
+        sim = _run_simulation(scene, args.trajectory)
     document = _simulation_document(sim)
     if args.output is not None:
         write_json_file(document, args.output, overwrite=args.overwrite)
@@ -573,7 +593,9 @@ def _summary(sim: Simulation, samples_per_cycle: int, output: str | None) -> lis
             f"{stats.steps} accepted, {stats.rejected} rejected, "
             f"{stats.rhs_evals} rhs evaluations, {stats.events} events",
         ),
-        ("wall time", f"{stats.wall_s:.4g} s ({per_step:.3g} us per accepted step)"),
+        ("wall time", f"{stats.wall_s:.4g} s in the kernels ({per_step:.3g} us per accepted "
+                      f"step); {_command_seconds():.3g} s the whole command (start-up, kernels "
+                      "loaded or compiled, reports)"),
     ]
     if samples_per_cycle:
         rows.append(("trajectory", f"{samples_per_cycle} samples per cycle (JSON 'trajectory')"))
@@ -659,12 +681,13 @@ def _add_lyapunov(commands: argparse._SubParsersAction) -> None:
     out.add_argument("--plot", metavar="FILE.png", help="write the convergence figure (.png, "
                      ".pdf or .svg; an existing figure is redrawn)")
     out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
+    out.add_argument("--quiet", action="store_true",
+                     help="no status line on stderr (compiling, running; shown on a terminal "
+                     f"when the work takes more than {STATUS_DELAY_S:g} s)")
     parser.set_defaults(func=_cmd_lyapunov)
 
 
 def _cmd_lyapunov(args: argparse.Namespace) -> int:
-    import time
-
     from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
     from chaospound.dynamics.system import System
 
@@ -683,15 +706,18 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_figure_path(args.plot)
     # warm the jitted kernels up, so that the reported wall time is the work's
-    lyapunov_spectrum(system, k=args.k, transient=0, tangent_transient=0, cycles=2, n_blocks=2)
+    _load_kernels(args.quiet, lambda: lyapunov_spectrum(
+        system, k=args.k, transient=0, tangent_transient=0, cycles=2, n_blocks=2))
     start = time.perf_counter()
-    spectrum = lyapunov_spectrum(
-        system,
-        k=args.k,
-        tangent_transient=args.tangent_transient,
-        cycles=args.cycles,
-        n_blocks=LYAPUNOV_BLOCKS,
-    )
+    with _Status(f"Lyapunov exponents: {system.transient} transient + {args.tangent_transient} "
+                 f"tangent transient + {args.cycles} averaged cycles", quiet=args.quiet):
+        spectrum = lyapunov_spectrum(
+            system,
+            k=args.k,
+            tangent_transient=args.tangent_transient,
+            cycles=args.cycles,
+            n_blocks=LYAPUNOV_BLOCKS,
+        )
     wall = time.perf_counter() - start
     two, two_system, two_wall = None, None, 0.0
     if args.two_trajectory:
@@ -701,12 +727,13 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
                 rtol=min(system.rtol, LYAPUNOV_TWO_RTOL), atol=min(system.atol, LYAPUNOV_TWO_ATOL)
             )
         start = time.perf_counter()
-        two = largest_exponent_two_trajectory(
-            two_system,
-            cycles=args.cycles,
-            separation=LYAPUNOV_SEPARATION,
-            n_blocks=LYAPUNOV_BLOCKS,
-        )
+        with _Status(f"two trajectories: {args.cycles} cycles", quiet=args.quiet):
+            two = largest_exponent_two_trajectory(
+                two_system,
+                cycles=args.cycles,
+                separation=LYAPUNOV_SEPARATION,
+                n_blocks=LYAPUNOV_BLOCKS,
+            )
         two_wall = time.perf_counter() - start
     if args.plot is not None:
         _lyapunov_save_plot(spectrum, two, args.plot)
@@ -817,7 +844,8 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
         ))  # fmt: skip
     work = document["work"]
     summary.append(("work", f"{work['steps']} steps, {work['rhs_evals']} rhs evaluations, "
-                            f"{work['wall_s']:.3g} s"))  # fmt: skip
+                            f"{work['wall_s']:.3g} s; {_command_seconds():.3g} s the whole "
+                            "command"))  # fmt: skip
     if plot is not None:
         summary.append(("wrote", plot))
     blocks = [
@@ -871,6 +899,9 @@ def _add_classify(commands: argparse._SubParsersAction) -> None:
     out.add_argument("--plot", metavar="FILE.png", help="write phase diagrams of the steady "
                      "state (.png, .pdf or .svg; an existing figure is redrawn)")
     out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
+    out.add_argument("--quiet", action="store_true",
+                     help="no progress line on stderr (compiling, transient cycles, ...; shown "
+                     f"on a terminal when the work takes more than {STATUS_DELAY_S:g} s)")
     parser.set_defaults(func=_cmd_classify)
 
 
@@ -892,17 +923,21 @@ def _cmd_classify(args: argparse.Namespace) -> int:
         raise CliError(f"--max-period {args.max_period}: must be an integer >= 1")
     if args.plot is not None:
         check_figure_path(args.plot)
-    regime = classify(
-        scene,
-        min_transient=shortest,
-        max_transient=args.max_transient,
-        window=args.window,
-        max_period=args.max_period,
-        lyapunov_cycles=args.lyapunov_cycles,
-        test01=not args.no_01,
-    )
-    if args.plot is not None:
-        _classify_save_plot(scene, regime, args.plot)
+    _load_kernels(args.quiet)
+    with _Status(f"classifying {scene.name}", quiet=args.quiet) as status:
+        regime = classify(
+            scene,
+            min_transient=shortest,
+            max_transient=args.max_transient,
+            window=args.window,
+            max_period=args.max_period,
+            lyapunov_cycles=args.lyapunov_cycles,
+            test01=not args.no_01,
+            progress=lambda text: status.set(f"classifying {scene.name}: {text}"),
+        )
+        if args.plot is not None:
+            status.set(f"classified {regime.label}: drawing the phase diagrams")
+            _classify_save_plot(scene, regime, args.plot)
     document = regime.to_json_dict()
     document["model"] = regime.evidence.get("model")
     document["scene"] = scene.to_dict()
@@ -970,6 +1005,7 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
         ("transient used", f"{regime.transient_used} cycles, then a {evidence.get('window_cycles')}"
                            "-cycle window"),
         ("solver", f"{scene.solver.method}, {accuracy}"),
+        ("wall time", f"{_command_seconds():.3g} s the whole command"),
     ]  # fmt: skip
     if plot is not None:
         rows.append(("wrote", plot))
@@ -1314,6 +1350,91 @@ def _scene_name(sweep) -> str:
         return str(json.loads(sweep.meta["scene_resolved"])["name"])
     except (KeyError, TypeError, ValueError):
         return os.path.basename(str(sweep.path))
+
+
+# =============================================================== status
+class _Status:
+    """A status line on stderr, redrawn in place with the seconds elapsed.
+
+    Shown only on a terminal (never into a file, a pipe or a test's capture), never
+    with ``--quiet``, and only once the work has taken ``delay`` seconds; cleared
+    when the work ends, so that stdout and logs hold results only.
+
+    Use as a context manager; :meth:`set` changes the text (a stage of the work).
+    """
+
+    def __init__(self, text: str, *, quiet: bool = False, delay: float | None = None,
+                 stream=None) -> None:
+        self.stream = sys.stderr if stream is None else stream
+        try:
+            terminal = bool(self.stream.isatty())
+        except (AttributeError, ValueError):
+            terminal = False
+        self.enabled = terminal and not quiet
+        self.delay = STATUS_DELAY_S if delay is None else delay
+        self.text = text
+        self.shown = False
+        self._start = time.perf_counter()
+        self._done = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def set(self, text: str) -> None:
+        self.text = text
+
+    def __enter__(self) -> _Status:
+        self._start = time.perf_counter()
+        if self.enabled:
+            self._thread = threading.Thread(target=self._run, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._done.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self.shown:
+            self._write("\r\033[K")
+
+    def _run(self) -> None:
+        if self._done.wait(self.delay):
+            return
+        while True:
+            elapsed = time.perf_counter() - self._start
+            self._write(f"\r\033[K{PROG}: {self.text} ... {elapsed:.0f} s")
+            self.shown = True
+            if self._done.wait(STATUS_INTERVAL_S):
+                return
+
+    def _write(self, text: str) -> None:
+        try:
+            self.stream.write(text)
+            self.stream.flush()
+        except (OSError, ValueError):
+            pass
+
+
+def _load_kernels(quiet: bool, warm=None) -> None:
+    """Load the jitted kernels before the work, outside its timing: from numba's disk
+    cache (well under a second), or by compiling them (the first run after installing
+    or editing, about :data:`COMPILE_ESTIMATE_S` s), which is announced at once on a
+    terminal. ``warm`` is the call that loads them (default: one tiny cycle)."""
+    from chaospound.kernels.jit import kernels_cached
+
+    if warm is None:
+        from chaospound.simulate import warm_up as warm
+    cached = kernels_cached()
+    if cached is False:
+        text, delay = f"compiling kernels, first run only, about {COMPILE_ESTIMATE_S} s", 0.0
+    else:
+        text, delay = "loading the compiled kernels", None
+    with _Status(text, quiet=quiet, delay=delay):
+        warm()
+
+
+def _command_seconds() -> float:
+    """Seconds since the command started (:func:`main`): parsing, loading or compiling
+    the kernels, the work and the reports."""
+    return time.perf_counter() - _COMMAND_START
 
 
 # ============================================================== helpers

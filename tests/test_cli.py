@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -495,3 +497,108 @@ def test_simulate_table_states_units(capsys):
     assert velocity.endswith("(A_g omega_Ax)")
     header = next(i for i, line in enumerate(out.splitlines()) if line.startswith("#"))
     assert "A_g k_Ax" in out.splitlines()[header + 1]
+
+
+# ============================================== status lines, compilation (issue 18)
+class FakeTerminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def slow_work(seconds: float = 0.35):
+    time.sleep(seconds)
+
+
+@pytest.mark.parametrize(("stream", "quiet", "shown"), [
+    (FakeTerminal(), False, True),
+    (FakeTerminal(), True, False),
+    (io.StringIO(), False, False),  # a file, a pipe, a log: never a status line
+])
+def test_status_line_only_on_a_terminal_without_quiet(stream, quiet, shown):
+    with cli._Status("working", quiet=quiet, delay=0.0, stream=stream) as status:
+        slow_work()
+        status.set("stage two")
+        slow_work(0.05)
+    text = stream.getvalue()
+    assert ("chaospound: working ... 0 s" in text) == shown
+    if shown:
+        assert text.endswith("\r\033[K")  # cleared: the results follow on a clean line
+    else:
+        assert text == ""
+
+
+def test_status_line_waits_for_slow_work():
+    stream = FakeTerminal()
+    with cli._Status("quick", delay=5.0, stream=stream):
+        slow_work(0.05)
+    assert stream.getvalue() == ""
+
+
+def test_compilation_is_announced_at_once(monkeypatch):
+    """Kernels not in numba's disk cache: the notice comes before the compilation."""
+    import chaospound.kernels.jit as jit
+
+    stream = FakeTerminal()
+    monkeypatch.setattr(sys, "stderr", stream)
+    monkeypatch.setattr(jit, "kernels_cached", lambda: False)
+    cli._load_kernels(False, slow_work)
+    assert "chaospound: compiling kernels, first run only, about 30-60 s ... 0 s" in \
+        stream.getvalue()
+    stream = FakeTerminal()
+    monkeypatch.setattr(sys, "stderr", stream)
+    cli._load_kernels(True, slow_work)  # --quiet
+    assert stream.getvalue() == ""
+    monkeypatch.setattr(jit, "kernels_cached", lambda: True)
+    cli._load_kernels(False, slow_work)  # cached: loads in well under the delay
+    assert stream.getvalue() == ""
+
+
+def test_cache_detection_sees_compiled_and_stale_kernels(tmp_path, monkeypatch):
+    """is_cached: False before the first compilation, True after, False after an edit."""
+    import importlib
+
+    from chaospound.kernels.jit import is_cached, kernels_cached
+
+    source = tmp_path / "fresh_kernel_module.py"
+    source.write_text("from numba import njit\n\n@njit(cache=True)\ndef twice(x):\n"
+                      "    return 2.0 * x\n", encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = importlib.import_module("fresh_kernel_module")
+    assert is_cached(module.twice) is False
+    assert module.twice(2.0) == 4.0
+    assert is_cached(module.twice) is True
+    source.write_text(source.read_text(encoding="utf-8").replace("2.0 * x", "x + x"),
+                      encoding="utf-8")  # edited: the cached code is stale
+    importlib.invalidate_caches()
+    module = importlib.reload(module)
+    assert is_cached(module.twice) is False
+    main(["simulate", "--preset", "wall", *SHORT, "--json"])  # loads (or compiles) them
+    assert kernels_cached() is True
+
+
+def test_classify_reports_its_stages(capsys, monkeypatch):
+    stream = FakeTerminal()
+    monkeypatch.setattr(cli, "STATUS_DELAY_S", 0.0)
+    monkeypatch.setattr(sys, "stderr", stream)
+    code = main(["classify", "--preset", "fig3a", "--transient", "5", "--max-transient", "40"])
+    out = capsys.readouterr().out
+    assert code == 0
+    text = stream.getvalue()
+    assert "chaospound: classifying fig3a" in text and text.endswith("\r\033[K")
+    assert "wall time" in out and "s the whole command" in out
+    # the stages the line shows
+    from chaospound.dynamics.classify import classify
+
+    stages = []
+    classify(load_preset("fig3a"), min_transient=5, max_transient=40, progress=stages.append)
+    assert stages[0] == "transient: 0 of at most 40 cycles"
+    assert "transient: 5 of at most 40 cycles" in stages
+    assert any(stage.startswith("record window: 64 cycles") for stage in stages)
+
+
+def test_simulate_reports_kernel_and_command_time(capsys):
+    code, out, err = run(capsys, "simulate", "--preset", "wall", *SHORT)
+    assert code == 0 and err == ""
+    [line] = [line for line in out.splitlines() if line.startswith("wall time")]
+    kernel, command = line.split("s in the kernels")[0].split()[-1], line.split(";")[1].split()[0]
+    assert 0 < float(kernel) < float(command)

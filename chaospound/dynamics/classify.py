@@ -80,7 +80,7 @@ excitation cycle); periods and transients in excitation cycles.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -208,6 +208,7 @@ def classify(
     tol: float | None = None,
     lyapunov_cycles: int = 200,
     test01: bool = True,
+    progress: Callable[[str], None] | None = None,
 ) -> Regime:
     """Classify the steady response of a pounding scene.
 
@@ -232,6 +233,9 @@ def classify(
         Cycles averaged for the largest exponent (only without a period).
     test01 : bool
         Run the 0-1 test (only without a period).
+    progress : callable, optional
+        Called with a short text at each stage ("transient: 400 of at most 2000
+        cycles", ...), e.g. to show progress; nothing else depends on it.
 
     Returns
     -------
@@ -269,9 +273,15 @@ def classify(
 
     # 1. adaptive transient, 2. record window; a window whose period differs from the
     # one its last sections have converged to was still transient: count it and go on
+    def report(text: str) -> None:
+        if progress is not None:
+            progress(text)
+
+    report(f"transient: 0 of at most {max_transient} cycles")
     run = simulate(scene, transient=0, record=min_transient, initial_state=start)
     sections, done = [run.strobe.state], min_transient
     while True:
+        report(f"transient: {done} of at most {max_transient} cycles")
         tail = np.concatenate(sections)[-(_tail_length(max_period)):] * weights
         converged = _converged_period(tail, max_period, TRANSIENT_MARGIN * tol)
         if converged is None and done < max_transient:
@@ -281,6 +291,7 @@ def classify(
             sections.append(run.strobe.state[1:])
             done += cycles
             continue
+        report(f"record window: {window} cycles after a {done}-cycle transient")
         record = simulate(scene, transient=0, record=window, initial_state=sections[-1][-1],
                           start_at_section=True)
         imp = record.impacts
@@ -313,6 +324,7 @@ def classify(
     states, last = record.strobe.state, record.strobe.state[-1]
     cycles, velocity, labels = imp.cycle, imp.velocity, imp.labels
     if test01 and states.shape[0] < ZERO_ONE_CYCLES + 1:
+        report(f"no period: {ZERO_ONE_CYCLES} cycles for the 0-1 test")
         more = simulate(scene, transient=0, record=ZERO_ONE_CYCLES + 1 - states.shape[0],
                         initial_state=last, start_at_section=True)
         states, last = np.concatenate([states, more.strobe.state[1:]]), more.strobe.state[-1]
@@ -323,12 +335,15 @@ def classify(
                                               section_phase)])
         velocity = np.concatenate([velocity, extra.velocity])
         labels = labels + extra.labels
+    report(f"no period: largest Lyapunov exponent over {lyapunov_cycles} cycles")
     spectrum = lyapunov_spectrum(as_system(scene), k=1, transient=0,
                                  cycles=lyapunov_cycles, initial_state=last)
     z = spectrum.max_exponent / max(spectrum.max_error, 1e-300)
     if AMBIGUOUS_Z[0] < abs(z) < AMBIGUOUS_Z[1]:
         # near the 3-sigma line a short run decides by chance: average 4x longer
         lyapunov_cycles = LONGER_RUN * lyapunov_cycles
+        report(f"no period: largest Lyapunov exponent over {lyapunov_cycles} cycles (near "
+               "the 3-sigma line)")
         spectrum = lyapunov_spectrum(as_system(scene), k=1, transient=0,
                                      cycles=lyapunov_cycles, initial_state=last)
     regime = classify_sequence(

@@ -31,3 +31,32 @@ invalidate_stale_cache()  # before any kernel is defined, so before any is loade
 kernel = njit(cache=True, _nrt=False, error_model="numpy")
 inline = njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
 driver = njit(cache=True, error_model="numpy")
+
+
+def is_cached(dispatcher) -> bool | None:
+    """Whether numba's disk cache holds fresh machine code of a ``cache=True`` kernel.
+
+    True when the kernel's index file (``__pycache__/*.nbi``) exists, matches the
+    source file's time stamp and size, and has an entry compiled for this CPU; False
+    when loading it will compile (the first run after installing or editing, 20-40 s);
+    None when this numba version does not tell (its cache layout is private).
+    """
+    try:
+        overloads = dispatcher._cache._cache_file._load_index()
+        magic = dispatcher.targetctx.codegen().magic_tuple()
+    except Exception:  # private numba API: any change means "unknown"
+        return None
+    return any(isinstance(key, tuple) and len(key) > 1 and key[1] == magic for key in overloads)
+
+
+def kernels_cached() -> bool | None:
+    """Whether the entry kernels of a run (the cycle integrator, which every model,
+    method and tangent run goes through, and the Jacobian trace) load from the disk
+    cache; None when unknown (see :func:`is_cached`)."""
+    from .integrate import run_cycles
+    from .models import jacobian_trace
+
+    states = [is_cached(kernel) for kernel in (run_cycles, jacobian_trace)]
+    if None in states:
+        return None
+    return all(states)
