@@ -736,7 +736,9 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
             )
         two_wall = time.perf_counter() - start
     if args.plot is not None:
-        _lyapunov_save_plot(spectrum, two, args.plot)
+        _lyapunov_save_plot(spectrum, two, args.plot,
+                            f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
+                            f"{system.model_name} model")
     document = _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
     if args.json:
         _emit(_json_text(document))
@@ -745,11 +747,11 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _lyapunov_save_plot(spectrum, two, path: str) -> None:
+def _lyapunov_save_plot(spectrum, two, path: str, scene: str) -> None:
     """Write the convergence figure atomically; file errors become CliError."""
     from chaospound.plot import plot_lyapunov_convergence, save
 
-    fig = plot_lyapunov_convergence(spectrum, two)
+    fig = plot_lyapunov_convergence(spectrum, two, scene=scene)
     check_figure_path(path)
     try:
         save(fig, path)

@@ -60,6 +60,9 @@ REGIME_COLORS = {
     "unresolved": "C4",
     "failed": "k",
 }
+#: colours of the Lyapunov exponents: matplotlib's ten, then six more distinct ones
+EXPONENT_COLORS = (*(f"C{i}" for i in range(10)), "#000080", "#b8860b", "#00a0a0", "#e000e0",
+                   "#556b2f", "#8b0000")
 VELOCITY_LABEL = r"$V/(A_g\,\omega_{Ax})$"
 PHASE_LABEL = r"phase $(t\ \mathrm{mod}\ T)/T$"
 EXPONENT_LABEL = r"$\lambda/\omega_{Ax}$ (per unit $t = \tau\omega_{Ax}$)"
@@ -276,29 +279,35 @@ def plot_lyapunov_convergence(
     two_trajectory: LargestExponent | None = None,
     *,
     ax: Axes | None = None,
+    scene: str | None = None,
 ) -> Figure:
     """Running Lyapunov estimates against the number of cycles averaged.
 
     Each exponent's running estimate (``spectrum.history``) is drawn with its
-    final value (dotted) and a band of +- one standard error; the right axis
-    gives the same values per excitation cycle (times T). The two-trajectory
-    estimate of the largest exponent, if given, is drawn dashed in black.
+    final value (dotted) and a band of +- one standard error, each in its own
+    colour (:data:`EXPONENT_COLORS`, 16 distinct); the right axis gives the same
+    values per excitation cycle (times T). The two-trajectory estimate of the
+    largest exponent, if given, is drawn dashed in black. On a new figure the
+    legend goes under the axes, in columns, so that the curves take the width.
 
     Parameters
     ----------
     spectrum : Spectrum
     two_trajectory : LargestExponent, optional
     ax : Axes, optional
+    scene : str, optional
+        What was run (e.g. ``"fig4, T/T_Ax = 0.9, towers model"``), named in the title.
 
     Returns
     -------
     Figure
     """
+    own_figure = ax is None
     fig, ax = _single_axes(ax)
     period = spectrum.period
     cycles = np.arange(1, spectrum.history.shape[0] + 1)
     for i, (value, error) in enumerate(zip(spectrum.exponents, spectrum.errors, strict=True)):
-        color = f"C{i % 10}"
+        color = EXPONENT_COLORS[i % len(EXPONENT_COLORS)]
         ax.plot(
             cycles,
             spectrum.history[:, i],
@@ -338,10 +347,17 @@ def plot_lyapunov_convergence(
     )
     right.set_ylabel(r"$\lambda T$ (per excitation cycle)")
     ax.set_ylim(*_converged_range(spectrum, two_trajectory))
-    ax.legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.16, 1.0), frameon=False)
+    entries = len(ax.get_legend_handles_labels()[0])
+    if own_figure:
+        fig.legend(fontsize="small", loc="outside lower center", ncols=min(entries, 4),
+                   frameon=False)
+    else:
+        ax.legend(fontsize="x-small", loc="best", frameon=False)
     total = float(spectrum.exponents.sum())
+    what = f"{scene}: " if scene else ""
     ax.set_title(
-        f"Lyapunov exponents (band: $\\pm$1 s.e.), sum {total:.4g}, trace {spectrum.trace:.4g}",
+        f"{what}Lyapunov exponents (band: $\\pm$1 s.e.), sum {total:.4g}, "
+        f"trace {spectrum.trace:.4g}",
         fontsize="medium",
     )
     return fig

@@ -166,11 +166,30 @@ def test_lyapunov_convergence_plot():
         np.testing.assert_array_equal(histories[i].get_ydata(), spectrum.history[:, i])
     dashed = [line for line in ax.lines if line.get_linestyle() == "--"]
     np.testing.assert_array_equal(dashed[0].get_ydata(), two.history)
-    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    [legend] = fig.legends  # under the axes, in columns
+    texts = [t.get_text() for t in legend.get_texts()]
     assert len(texts) == 4 and f"{spectrum.exponents[0]:.4g}" in texts[0]
     assert "omega_{Ax}" in ax.get_ylabel() and "cycles" in ax.get_xlabel()
     lo, hi = ax.get_ylim()
     assert lo < spectrum.exponents.min() and hi >= 0.0  # final values and zero visible
+
+
+def test_lyapunov_convergence_of_twelve_exponents_is_readable():
+    """12 distinct colours, the curves take the figure's width, the scene is named."""
+    from matplotlib.colors import to_hex
+
+    scene = load_preset("fig4").with_params(period_ratio=0.9, transient=5)
+    spectrum = lyapunov_spectrum(scene, tangent_transient=5, cycles=20)
+    assert spectrum.exponents.size == 12
+    fig = plot.plot_lyapunov_convergence(spectrum, scene="fig4, T/T_Ax = 0.9")
+    ax = fig.axes[0]
+    histories = [line for line in ax.lines if len(line.get_xdata()) == spectrum.cycles]
+    assert len({to_hex(line.get_color()) for line in histories}) == 12
+    assert ax.get_title().startswith("fig4, T/T_Ax = 0.9: Lyapunov exponents")
+    fig.draw_without_rendering()  # constrained layout
+    box = ax.get_position()
+    assert box.width > 0.8  # was 0.6: the legend's column left a third of the width empty
+    assert fig.legends[0].get_window_extent().y1 < box.y0 * fig.bbox.height
 
 
 def test_plots_draw_into_given_axes():
