@@ -374,3 +374,22 @@ def test_cli_figures_are_redrawn_but_data_files_are_not_replaced(capsys, tmp_pat
         code, out, err = run_cli(capsys, *argv, "--plot", str(data))
         assert code == 2 and out == "" and "not a figure format" in err and name in err
         assert data.read_text(encoding="utf-8") == "results"
+
+
+def test_cli_classify_phase_diagrams_are_smooth(capsys, tmp_path, monkeypatch):
+    """2000 dense samples per cycle: about 90 across a contact (10 before: polygons)."""
+    import chaospound.plot
+
+    drawn = []
+    real_save = chaospound.plot.save
+    monkeypatch.setattr(chaospound.plot, "save", lambda fig, path: (drawn.append(fig),
+                                                                    real_save(fig, path)))
+    target = tmp_path / "phase.png"
+    code, out, err = run_cli(capsys, "classify", "--preset", "fig3a", "--transient", "5",
+                             "--max-transient", "40", "--plot", str(target))
+    assert code == 0, err
+    assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    [fig] = drawn
+    for ax in fig.axes:
+        whole, last_cycle = ax.lines[:2]
+        assert len(last_cycle.get_xdata()) >= 2000
