@@ -6,7 +6,7 @@ Commands::
     chaospound params [NAME ...]         flat parameter names, meaning and range
     chaospound simulate (--preset NAME | SCENE.toml) [--set k=v ...] [--json] ...
     chaospound sweep (--preset NAME | SCENE.toml) [--param NAME=GRID ...] -o FILE.h5 ...
-    chaospound plot FILE.h5 [-o FILE.png] [--branch NAME]
+    chaospound plot FILE.h5 [-o FILE.png|.pdf|.svg] [--branch NAME] [--dpi N] [--size W,H] ...
 
 Every command that runs a scene takes the same scene options, added by
 :func:`add_scene_options` and turned into a validated
@@ -1220,15 +1220,28 @@ def _add_plot(commands: argparse._SubParsersAction) -> None:
         description="Draw a sweep file: for one swept parameter the bifurcation diagram "
         "(impact velocity against the parameter, coloured by regime; a second panel with "
         "the largest Lyapunov exponent when the sweep has exponents), for two a regime map; "
-        "continuation branches side by side. A file still being written shows its "
-        "finished points.",
+        "forward and backward continuation overlaid on one axis (hysteresis), other "
+        "branches side by side. A file still being written shows its finished points. "
+        "The format follows the output's extension: .png (raster, see --dpi), .pdf or .svg "
+        "(vector, for papers); an existing figure is redrawn.",
     )
     parser.add_argument("sweep_file", metavar="SWEEP.h5", help="a file of 'chaospound sweep'")
-    parser.add_argument("-o", "--output", metavar="FILE.png",
-                        help="the figure (default: the sweep file with .png; format from "
-                        "the extension)")
+    parser.add_argument("-o", "--output", metavar="FILE",
+                        help="the figure: FILE.png, FILE.pdf or FILE.svg (default: the sweep "
+                        "file with .png)")
     parser.add_argument("--branch", metavar="NAME",
-                        help="only this branch (fresh, forward or backward; default: all)")
+                        help="only this branch (forward or backward of a continuation; "
+                        "default: all)")
+    parser.add_argument("--dpi", type=_positive_float, default=150.0, metavar="DPI",
+                        help="resolution of raster output such as .png, dots per inch (150)")
+    parser.add_argument("--size", type=_float_pair, metavar="W,H",
+                        help="figure size in inches, e.g. 7,4.5 (default: from the panels)")
+    parser.add_argument("--xlim", type=_float_pair, metavar="MIN,MAX",
+                        help="x range: the (first) swept parameter (--xlim=-1,2 for a "
+                        "negative start)")
+    parser.add_argument("--ylim", type=_float_pair, metavar="MIN,MAX",
+                        help="y range: the impact velocity, or the second parameter of a "
+                        "regime map")
     parser.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
     parser.set_defaults(func=_cmd_plot)
 
@@ -1244,11 +1257,27 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     if os.path.abspath(output) == os.path.abspath(args.sweep_file):
         raise CliError(f"output {_path(output)} is the sweep file itself")
     check_figure_path(output)
+    for option in ("xlim", "ylim"):
+        pair = getattr(args, option)
+        if pair is not None and not pair[0] < pair[1]:
+            raise CliError(f"--{option} {pair[0]:g},{pair[1]:g}: need MIN < MAX")
+    if args.size is not None and min(args.size) <= 0:
+        raise CliError(f"--size {args.size[0]:g},{args.size[1]:g}: need W > 0 and H > 0")
     branches = [args.branch] if args.branch is not None else list(sweep.branches)
     fig = _sweep_figure(sweep, branches)
+    if args.size is not None:
+        fig.set_size_inches(*args.size)
+    for text in [fig.get_suptitle() and fig._suptitle, *(ax.title for ax in fig.axes)]:
+        if text:
+            text.set_wrap(True)  # a long title breaks into lines instead of running off
+    for ax in fig.axes:
+        if args.xlim is not None:
+            ax.set_xlim(*args.xlim)
+        if args.ylim is not None and ax.get_label() == _MAIN_PANEL:
+            ax.set_ylim(*args.ylim)
     check_figure_path(output)
     try:
-        save(fig, output)
+        save(fig, output, dpi=args.dpi)
     except OSError as exc:
         raise CliError(f"cannot write {_path(output)}: {exc.strerror or exc}") from None
     kind = "bifurcation diagram" if len(sweep.parameters) == 1 else "regime map"
@@ -1257,53 +1286,104 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _positive_float(text: str) -> float:
+    """argparse type: a number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a number > 0")
+    return value
+
+
+def _float_pair(text: str) -> tuple[float, float]:
+    """argparse type: two finite numbers separated by a comma (``7,4.5``)."""
+    parts = text.split(",")
+    try:
+        pair = tuple(float(p) for p in parts)
+    except ValueError:
+        pair = ()
+    if len(pair) != 2 or not all(math.isfinite(v) for v in pair):
+        raise argparse.ArgumentTypeError(f"{text!r}: must be two numbers, e.g. 0.5,1.5")
+    return pair
+
+
+#: label of the panels that --ylim applies to (impact velocity, regime map)
+_MAIN_PANEL = "main"
+
+
 #: map colour of each stored regime code (chaospound.store.REGIMES); the regimes
 #: shared with the bifurcation diagram take chaospound.plot.REGIME_COLORS
 _MAP_EXTRA_COLORS = {"pending": "white", "unresolved": "C4", "failed": "black"}
 
 
 def _sweep_figure(sweep, branches: Sequence[str]):
-    """The figure of ``chaospound plot``: one column per branch.
+    """The figure of ``chaospound plot``.
 
-    One parameter: :func:`chaospound.plot.plot_bifurcation` per branch (two rows with
-    Lyapunov exponents); two parameters: a regime map per branch.
+    One parameter: :func:`chaospound.plot.plot_bifurcation` per branch, one column each
+    (two rows with Lyapunov exponents), except forward and backward together, which
+    :func:`chaospound.plot.plot_hysteresis` overlays on one axis; two parameters: a
+    regime map per branch. Axes are labelled with symbols and units
+    (:func:`chaospound.plot.parameter_label`).
     """
     from matplotlib.figure import Figure
 
-    from chaospound.plot import PERIOD_RATIO_LABEL, plot_bifurcation
+    from chaospound.plot import parameter_label, plot_bifurcation, plot_hysteresis
 
-    cols = len(branches)
     name = _scene_name(sweep)
     done = {b: sum(s != "pending" for s in sweep.status(b)) for b in branches}
     total = int(math.prod(sweep.shape))
+    labels = [parameter_label(p) for p in sweep.parameters]
     if len(sweep.parameters) == 2:
+        cols = len(branches)
         fig = Figure(figsize=(6.0 * cols + 1.5, 5.0), layout="constrained")
         axes = fig.subplots(1, cols, squeeze=False, sharex=True, sharey=True)[0]
         for ax, branch in zip(axes, branches, strict=True):
+            ax.set_label(_MAIN_PANEL)
             _regime_map(ax, sweep, branch)
             ax.set_title(_branch_title(branch, done[branch], total))
-        fig.suptitle(f"{name}: regimes over {' x '.join(sweep.parameters)} ({sweep.meta['model']} "
-                     "model)")
+        fig.suptitle(f"{name}: regimes over {labels[0]} and {labels[1]} "
+                     f"({sweep.meta['model']} model)")
         return fig
     parameter = sweep.parameters[0]
     values = sweep.grid[parameter]
-    label = PERIOD_RATIO_LABEL if parameter == "period_ratio" else parameter
     with_exponents = int(sweep.sweep.get("lyapunov", 0)) != 0
     rows = 2 if with_exponents else 1
+    title = f"{name}: impact velocity against {labels[0]} ({sweep.meta['model']} model)"
+    if sorted(branches) == ["backward", "forward"]:  # hysteresis: one axis, both ways
+        fig = Figure(figsize=(9.0, 7.0 if with_exponents else 5.0), layout="constrained")
+        axes = list(fig.subplots(rows, 1, sharex=True, squeeze=False,
+                                 height_ratios=(3, 1) if with_exponents else None)[:, 0])
+        axes[0].set_label(_MAIN_PANEL)
+        order = ["forward", "backward"]
+        plot_hysteresis(
+            values,
+            {b: sweep.impact_velocities(b) for b in order},
+            exponents={b: sweep.array("max_exponent", b) for b in order}
+            if with_exponents else None,
+            ax=axes,
+            parameter_label=labels[0],
+        )
+        axes[0].set_title(", ".join(f"{b} {done[b]}/{total}" for b in order) + " points")
+        fig.suptitle(title)
+        return fig
+    cols = len(branches)
     fig = Figure(figsize=(8.0 * cols, 7.0 if with_exponents else 5.0), layout="constrained")
     grid = fig.subplots(rows, cols, squeeze=False, sharex=True, sharey="row",
                         height_ratios=(3, 1) if with_exponents else None)
     for j, branch in enumerate(branches):
+        grid[0, j].set_label(_MAIN_PANEL)
         plot_bifurcation(
             values,
             sweep.impact_velocities(branch),
             regimes=sweep.regimes(branch),
             exponents=sweep.array("max_exponent", branch) if with_exponents else None,
             ax=list(grid[:, j]),
-            parameter_label=label,
+            parameter_label=labels[0],
         )
         grid[0, j].set_title(_branch_title(branch, done[branch], total))
-    fig.suptitle(f"{name}: impact velocity against {parameter} ({sweep.meta['model']} model)")
+    fig.suptitle(title)
     return fig
 
 
@@ -1322,7 +1402,7 @@ def _regime_map(ax, sweep, branch: str) -> None:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from chaospound.plot import REGIME_COLORS
+    from chaospound.plot import REGIME_COLORS, parameter_label
     from chaospound.store import REGIMES
 
     colors = [REGIME_COLORS.get(r) or _MAP_EXTRA_COLORS.get(r, "0.3") for r in REGIMES]
@@ -1336,8 +1416,8 @@ def _regime_map(ax, sweep, branch: str) -> None:
                for code, n in present if n]
     ax.legend(handles=handles, fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0),
               frameon=False)
-    ax.set_xlabel(first)
-    ax.set_ylabel(second)
+    ax.set_xlabel(parameter_label(first))
+    ax.set_ylabel(parameter_label(second))
 
 
 def _cell_edges(values) -> object:

@@ -39,6 +39,8 @@ __all__ = [
     "CORNER_COLORS",
     "REGIME_COLORS",
     "axis_label",
+    "parameter_label",
+    "plot_hysteresis",
     "phase_panels",
     "plot_bifurcation",
     "plot_impact_map",
@@ -67,6 +69,40 @@ VELOCITY_LABEL = r"$V/(A_g\,\omega_{Ax})$"
 PHASE_LABEL = r"phase $(t\ \mathrm{mod}\ T)/T$"
 EXPONENT_LABEL = r"$\lambda/\omega_{Ax}$ (per unit $t = \tau\omega_{Ax}$)"
 PERIOD_RATIO_LABEL = r"$T/T_{Ax}$"
+#: axis label of each sweep parameter: symbol and unit (MODEL.md section 1), never the
+#: raw flat name; see :func:`parameter_label`
+PARAMETER_LABELS = {
+    "period_ratio": PERIOD_RATIO_LABEL,
+    "freq_ratio": r"$\Omega = T_{Ax}/T_{Bx}$",
+    "mass_ratio": r"$m = m_A/m_B$",
+    "gap": r"$a/A_g$",
+    "offset_y": r"$y_{off}/A_g$",
+    "beta": r"$\beta$ (Hertz stiffness)",
+    "chi": r"$\chi$ (Hertz exponent)",
+    "rtol": "relative tolerance rtol",
+    "atol": "absolute tolerance atol",
+    "phase": r"section phase $t_0/T$",
+    "transient": "transient cycles",
+    "record": "recorded cycles",
+    "steps_per_cycle": "rk4 steps per cycle",
+}
+_TOWER_LABELS = {
+    "length": r"$l_{T}/A_g$",
+    "width": r"$w_{T}/A_g$",
+    "width_ratio": r"$w_{T}/l_{T}$",
+    "ecc_x": r"$e_{Tx}/A_g$",
+    "ecc_x_ratio": r"$e_{Tx}/l_{T}$",
+    "ecc_y": r"$e_{Ty}/A_g$",
+    "ecc_y_ratio": r"$e_{Ty}/l_{T}$",
+    "gyration": r"$\rho_{T}/A_g$",
+    "zeta_x": r"$\zeta_{Tx}$",
+    "zeta_y": r"$\zeta_{Ty}$",
+    "zeta_t": r"$\zeta_{T\theta}$",
+}
+PARAMETER_LABELS.update({
+    f"{name}_{tower}": label.replace("{T", "{" + tower).replace("_{T}", "_" + tower)
+    for name, label in _TOWER_LABELS.items() for tower in "AB"
+})
 _TOWER_PANELS = (
     ("Tower A, translation", "X_A", "dX_A"),
     ("Tower A, rotation", "th_A", "dth_A"),
@@ -483,6 +519,86 @@ def plot_bifurcation(
     return fig
 
 
+# ============================================================= hysteresis
+#: marker and colour of each continuation branch: the marker points the way it went
+BRANCH_STYLES = {
+    "forward": {"marker": ">", "color": "C0", "arrow": "\u2192", "way": "increasing"},
+    "backward": {"marker": "<", "color": "C3", "arrow": "\u2190", "way": "decreasing"},
+}
+
+
+def plot_hysteresis(
+    parameter_values: Sequence[float] | np.ndarray,
+    branches: dict[str, Sequence[Sequence[float] | np.ndarray]],
+    exponents: dict[str, Sequence[float] | np.ndarray] | None = None,
+    ax: Axes | Sequence[Axes] | None = None,
+    *,
+    parameter_label: str = PERIOD_RATIO_LABEL,
+) -> Figure:
+    """Forward and backward continuation overlaid on one axis (coexisting responses).
+
+    Each branch's impact velocities are drawn with a triangle pointing the way
+    the continuation went (forward ``>`` in blue, backward ``<`` in red), so
+    where the branches differ the response is hysteretic. Points of a branch
+    without an impact are marked as a rug of ticks at the bottom of the axis,
+    one row per branch, instead of leaving the axis empty there.
+
+    Parameters
+    ----------
+    parameter_values : sequence of float (m,)
+    branches : dict
+        ``{"forward": velocities per point, "backward": ...}`` (m entries each).
+    exponents : dict, optional
+        The largest exponent per point of each branch: a second panel below.
+    ax : Axes, or a pair of Axes with ``exponents``, optional
+    parameter_label : str
+
+    Returns
+    -------
+    Figure
+    """
+    values = np.asarray(parameter_values, dtype=float).reshape(-1)
+    for name, per_point in branches.items():
+        if name not in BRANCH_STYLES:
+            raise ValueError(f"branch {name!r}: expected forward or backward")
+        if len(per_point) != values.size:
+            raise ValueError(f"branch {name}: {len(per_point)} entries for {values.size} "
+                             "parameter values")
+    fig, axes = _bifurcation_axes(ax, exponents is not None)
+    top = axes[0]
+    rug = top.get_xaxis_transform()  # x in data, y in axes fraction
+    for row, (name, per_point) in enumerate(branches.items()):
+        style = BRANCH_STYLES[name]
+        counts = np.array([np.asarray(v).size for v in per_point])
+        x = np.repeat(values, counts)
+        v = (np.concatenate([np.asarray(p, dtype=float).reshape(-1) for p in per_point])
+             if counts.sum() else np.zeros(0))
+        top.scatter(x, v, s=16, marker=style["marker"], color=style["color"], alpha=0.75,
+                    linewidths=0,
+                    label=f"{name} {style['arrow']} ({style['way']} {parameter_label})")
+        silent = values[counts == 0]
+        if silent.size:
+            top.plot(silent, np.full(silent.size, 0.02 + 0.035 * row), ls="none",
+                     marker="|", ms=8, mew=1.5, color=style["color"], transform=rug,
+                     label=f"{name}: no impact ({silent.size} points)")
+    top.set_ylabel(VELOCITY_LABEL)
+    top.set_xlabel(parameter_label)
+    top.legend(fontsize="small", markerscale=1.5, frameon=False)
+    if exponents is not None:
+        bottom = axes[1]
+        for name, lam in exponents.items():
+            style = BRANCH_STYLES[name]
+            lam = np.asarray(lam, dtype=float).reshape(-1)
+            finite = np.isfinite(lam)
+            bottom.plot(values[finite], lam[finite], color=style["color"], lw=0.7,
+                        marker=style["marker"], ms=4, label=name)
+        bottom.axhline(0.0, color="k", lw=0.5)
+        bottom.set_ylabel(r"$\lambda_1/\omega_{Ax}$")
+        bottom.set_xlabel(parameter_label)
+        top.set_xlabel("")
+    return fig
+
+
 # ==================================================================== save
 def save(fig: Figure, path: str | os.PathLike[str], *, dpi: int = 150) -> None:
     """Write a figure atomically: a temporary file in the same folder, then a rename.
@@ -540,6 +656,12 @@ def phase_panels(state_names: Sequence[str]) -> list[tuple[str, str, str]]:
     if len(names) % 2:
         starts[-1] = len(names) - 2
     return [(f"{names[s]} vs {names[s + 1]}", names[s], names[s + 1]) for s in starts]
+
+
+def parameter_label(name: str) -> str:
+    """Axis label of a swept parameter: its symbol and unit (``"gap"`` -> ``$a/A_g$``);
+    a name without an entry in :data:`PARAMETER_LABELS` is returned as is."""
+    return PARAMETER_LABELS.get(name, name)
 
 
 def axis_label(name: str) -> str:

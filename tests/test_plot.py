@@ -393,3 +393,82 @@ def test_cli_classify_phase_diagrams_are_smooth(capsys, tmp_path, monkeypatch):
     for ax in fig.axes:
         whole, last_cycle = ax.lines[:2]
         assert len(last_cycle.get_xdata()) >= 2000
+
+
+# ------------------------------------------------ chaospound plot (issue 18 item 3)
+@pytest.fixture(scope="module")
+def hysteresis_file(tmp_path_factory):
+    """The README's hysteresis sweep on a coarse grid: wall, gap 5, both ways."""
+    path = tmp_path_factory.mktemp("hysteresis") / "hysteresis.h5"
+    assert main(["sweep", "--preset", "wall", "--set", "gap=5", "--param",
+                 "period_ratio=0.45:1.0#12", "--continuation", "both", "-o", str(path),
+                 "--quiet"]) == 0
+    return path
+
+
+def test_parameter_labels_are_symbols_with_units():
+    from chaospound.scene import PARAMETERS, Scene
+
+    assert plot.parameter_label("period_ratio") == r"$T/T_{Ax}$"
+    assert plot.parameter_label("gap") == r"$a/A_g$"
+    assert plot.parameter_label("ecc_y_ratio_A") == r"$e_{Ay}/l_{A}$"
+    assert plot.parameter_label("zeta_t_B") == r"$\zeta_{B\theta}$"
+    numeric = [name for name in PARAMETERS
+               if isinstance(Scene().to_dict()[name], int | float)
+               and not isinstance(Scene().to_dict()[name], bool) and name != "max_steps"]
+    assert [name for name in numeric if plot.parameter_label(name) == name] == []
+
+
+def test_hysteresis_overlays_both_branches_and_marks_points_without_impacts(hysteresis_file):
+    from chaospound import cli
+    from chaospound.store import open_sweep
+
+    sweep = open_sweep(hysteresis_file)
+    fig = cli._sweep_figure(sweep, sweep.branches)
+    [ax] = fig.axes  # one axis, both branches
+    assert ax.get_xlabel() == r"$T/T_{Ax}$" and "fresh" not in ax.get_title()
+    forward, backward = ax.collections
+    assert forward.get_paths()[0] != backward.get_paths()[0]  # > and < markers
+    for branch, points in (("forward", forward), ("backward", backward)):
+        counts = sweep.array("impact_count", branch)
+        assert len(points.get_offsets()) == int(counts.sum())
+        rug = [line for line in ax.lines if line.get_label().startswith(f"{branch}: no impact")]
+        silent = int(np.count_nonzero(counts == 0))
+        if silent:
+            [line] = rug
+            np.testing.assert_array_equal(line.get_xdata(),
+                                          sweep.grid["period_ratio"][counts == 0])
+        else:
+            assert rug == []
+    # the README's case coexists: the backward branch pounds where the forward one does not
+    assert np.count_nonzero(sweep.array("impact_count", "backward")) > \
+        np.count_nonzero(sweep.array("impact_count", "forward"))
+
+
+def test_plot_command_size_dpi_limits_and_vector_output(hysteresis_file, capsys, monkeypatch):
+    from matplotlib.image import imread
+
+    import chaospound.plot
+
+    drawn = []
+    real_save = chaospound.plot.save
+    monkeypatch.setattr(chaospound.plot, "save", lambda fig, path, **kw: (
+        drawn.append(fig), real_save(fig, path, **kw)))
+    png = hysteresis_file.with_name("small.png")
+    code, out, err = run_cli(capsys, "plot", str(hysteresis_file), "-o", str(png), "--size",
+                             "4,3", "--dpi", "50", "--xlim", "0.5,0.9", "--ylim", "0,30")
+    assert code == 0, err
+    assert imread(png).shape[:2] == (150, 200)  # 3 x 4 inches at 50 dpi
+    main_axis = drawn[-1].axes[0]
+    assert main_axis.get_xlim() == (0.5, 0.9) and main_axis.get_ylim() == (0.0, 30.0)
+    for suffix, magic in ((".svg", b"<?xml"), (".pdf", b"%PDF")):
+        target = hysteresis_file.with_name("vector" + suffix)
+        code, out, err = run_cli(capsys, "plot", str(hysteresis_file), "-o", str(target))
+        assert code == 0 and target.read_bytes().startswith(magic)
+    for bad in (["--size", "0,3"], ["--xlim", "2,1"], ["--dpi", "0"], ["--ylim", "1"]):
+        code, out, err = run_cli(capsys, "plot", str(hysteresis_file), *bad)
+        assert code == 2 and out == "" and err.count("\n") == 1 and bad[0] in err
+    code, out, err = run_cli(capsys, "plot", "--help")
+    assert code == 0
+    for word in ("--dpi", "--size", "--xlim", "--ylim", ".pdf", ".svg", "vector"):
+        assert word in out

@@ -511,12 +511,12 @@ def test_plot_command_writes_the_bifurcation_diagram(lyapunov_sweep, capsys):
         assert scatter_points(top) == total
         assert scatter_points(bottom) == 12  # every point has its exponent
         assert np.all(np.isfinite(sweep.array("max_exponent", branch)))
-    # the command's figure: one column per branch, exponents below
+    # the command's figure: forward and backward overlaid on one axis, exponents below
     fig = cli._sweep_figure(sweep, sweep.branches)
-    assert len(fig.axes) == 4
-    for column, branch in enumerate(sweep.branches):
-        top = fig.axes[column]
-        assert scatter_points(top) == int(sweep.array("impact_count", branch).sum())
+    assert len(fig.axes) == 2
+    top = fig.axes[0]
+    assert scatter_points(top) == sum(int(sweep.array("impact_count", branch).sum())
+                                      for branch in sweep.branches)
 
 
 def test_plot_command_draws_a_regime_map_for_two_parameters(tmp_path, capsys):
