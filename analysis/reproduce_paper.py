@@ -857,8 +857,8 @@ def figure_fig4_regimes(path: Path, scans: dict, adaptive: dict, window_coarse: 
                      label=f"{name}: classify() (aperiodic points, 200 cycles)")
     ax1.axhline(0, color="k", lw=0.6)
     ax1.set_title(r"(b) largest Lyapunov exponent $\lambda_1$: 100 cycles after the 40-cycle "
-                  "transient (error bars 3 standard errors), and classify()'s 200-cycle value",
-                  fontsize="medium")
+                  "transient (error bars 3 standard errors),\nand classify()'s 200-cycle value",
+                  fontsize="medium")  # two lines: on one it ran off the 11-inch canvas
     ax1.set_ylabel(r"$\lambda_1/\omega_{Ax}$ (per unit $t=\tau\omega_{Ax}$)")
     ax1.set_xlabel(PERIOD_LABEL)
     ax1.legend(fontsize="x-small", loc="upper right")

@@ -472,3 +472,32 @@ def test_plot_command_size_dpi_limits_and_vector_output(hysteresis_file, capsys,
     assert code == 0
     for word in ("--dpi", "--size", "--xlim", "--ylim", ".pdf", ".svg", "vector"):
         assert word in out
+
+
+def test_paper_fig4_regimes_titles_stay_on_the_canvas(monkeypatch):
+    """analysis/reproduce_paper.py: panel (b)'s title ran off the 11-inch canvas."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "analysis" / "reproduce_paper.py"
+    spec = importlib.util.spec_from_file_location("reproduce_paper_titles", script)
+    paper = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, spec.name, paper)  # for its dataclasses
+    spec.loader.exec_module(paper)
+    values = np.linspace(0.3, 2.0, 30)
+    regimes = ["periodic 1-1"] * 15 + ["chaotic"] * 15
+    scan = {"values": values, "regime": regimes, "lam": np.full(30, 0.01),
+            "lam_err": np.full(30, 0.001), "velocities": [[1.0]] * 30}
+    adaptive = {"values": values, "regime": regimes,
+                "points": [{"lam": 0.02}] * 30}
+    drawn = []
+    monkeypatch.setattr(paper.cplot, "save", lambda fig, path: drawn.append(fig))
+    paper.figure_fig4_regimes(Path("unused.png"), {"translational": scan, "torsional": scan},
+                              {"translational": adaptive, "torsional": adaptive}, {})
+    [fig] = drawn
+    fig.draw_without_rendering()
+    width = fig.bbox.width
+    for ax in fig.axes:
+        box = ax.title.get_window_extent()
+        assert box.x0 >= 0 and box.x1 <= width, ax.get_title()
