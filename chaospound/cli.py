@@ -272,7 +272,7 @@ def _note_file_defaults(path: str, scene: Scene) -> None:
     shown = ", ".join(f"{name.removesuffix('_A').replace('zeta_x', 'zeta')} = {values[name]:g}"
                       if isinstance(values[name], float | int) else f"{name} = {values[name]}"
                       for name in FILE_DEFAULTS_SHOWN)
-    _note(f"scene file {path!r} sets no parameter: running the default scene ({shown}; "
+    _note(f"scene file {_path(path)} sets no parameter: running the default scene ({shown}; "
           "every default: 'chaospound params')")
 
 
