@@ -36,9 +36,10 @@ driver = njit(cache=True, error_model="numpy")
 def is_cached(dispatcher) -> bool | None:
     """Whether numba's disk cache holds fresh machine code of a ``cache=True`` kernel.
 
-    True when the kernel's index file (``__pycache__/*.nbi``) exists, matches the
-    source file's time stamp and size, and has an entry compiled for this CPU; False
-    when loading it will compile (the first run after installing or editing, 20-40 s);
+    True when the kernel's index file (``*.nbi`` in its cache folder) exists, carries
+    the stamp of the current source file (numba's freshness check), and has an entry
+    compiled for this CPU; False when loading it will compile (the first run after
+    installing or editing, or after :mod:`.cache` cleared the cache: 30-60 s);
     None when this numba version does not tell (its cache layout is private).
     """
     try:
