@@ -1506,7 +1506,7 @@ def _load_kernels(quiet: bool, warm=None) -> None:
     cache (well under a second), or by compiling them (the first run after installing
     or editing, about :data:`COMPILE_ESTIMATE_S` s), which is announced at once on a
     terminal. ``warm`` is the call that loads them (default: one tiny cycle)."""
-    from chaospound.kernels.jit import kernels_cached
+    from chaospound.simulate import kernels_cached
 
     if warm is None:
         from chaospound.simulate import warm_up as warm

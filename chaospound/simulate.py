@@ -386,3 +386,12 @@ def warm_up() -> None:
                    np.zeros((2, 2)), np.zeros((1, 3)), np.zeros((0, kin.N_IMP_FIELDS)),
                    np.zeros((0, 2)), stats, _NO_TANGENT)
     _WARM.append(True)
+
+
+def kernels_cached() -> bool | None:
+    """Whether the cycle integrator, which every model, method and tangent run goes
+    through (the 30-60 s of a first run's compilation), loads from numba's disk cache;
+    None when unknown (see :func:`chaospound.kernels.jit.is_cached`)."""
+    from .kernels.jit import is_cached
+
+    return is_cached(kin.run_cycles)

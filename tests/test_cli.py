@@ -536,7 +536,7 @@ def test_status_line_waits_for_slow_work():
 
 def test_compilation_is_announced_at_once(monkeypatch):
     """Kernels not in numba's disk cache: the notice comes before the compilation."""
-    import chaospound.kernels.jit as jit
+    import chaospound.simulate as jit  # where kernels_cached lives
 
     stream = FakeTerminal()
     monkeypatch.setattr(sys, "stderr", stream)
@@ -557,7 +557,8 @@ def test_cache_detection_sees_compiled_and_stale_kernels(tmp_path, monkeypatch):
     """is_cached: False before the first compilation, True after, False after an edit."""
     import importlib
 
-    from chaospound.kernels.jit import is_cached, kernels_cached
+    from chaospound.kernels.jit import is_cached
+    from chaospound.simulate import kernels_cached
 
     source = tmp_path / "fresh_kernel_module.py"
     source.write_text("from numba import njit\n\n@njit(cache=True)\ndef twice(x):\n"

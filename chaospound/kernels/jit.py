@@ -49,15 +49,3 @@ def is_cached(dispatcher) -> bool | None:
         return None
     return any(isinstance(key, tuple) and len(key) > 1 and key[1] == magic for key in overloads)
 
-
-def kernels_cached() -> bool | None:
-    """Whether the entry kernels of a run (the cycle integrator, which every model,
-    method and tangent run goes through, and the Jacobian trace) load from the disk
-    cache; None when unknown (see :func:`is_cached`)."""
-    from .integrate import run_cycles
-    from .models import jacobian_trace
-
-    states = [is_cached(kernel) for kernel in (run_cycles, jacobian_trace)]
-    if None in states:
-        return None
-    return all(states)
