@@ -1111,8 +1111,6 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
     if args.resume and args.overwrite:
         raise CliError("give --resume or --overwrite, not both")
-    if args.workers < 1:
-        raise CliError(f"--workers {args.workers}: must be an integer >= 1")
     if args.chunk is not None and args.chunk < 1:
         raise CliError(f"--chunk {args.chunk}: must be an integer >= 1")
     scene = scene_from_args(args)
@@ -1138,6 +1136,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         window_tol=args.window_tol,
     )
     _check_sweep_output(args.output, resume=args.resume, overwrite=args.overwrite)
+    note_sweep_overrides(args, scene)  # after every check: bad input stays one line
     from chaospound.distributed import ClusterUnavailable, connect, disconnect
 
     client = cluster = None

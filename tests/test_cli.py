@@ -603,3 +603,19 @@ def test_simulate_reports_kernel_and_command_time(capsys):
     [line] = [line for line in out.splitlines() if line.startswith("wall time")]
     kernel, command = line.split("s in the kernels")[0].split()[-1], line.split(";")[1].split()[0]
     assert 0 < float(kernel) < float(command)
+
+
+def test_sweep_says_when_the_grid_overrides_a_set(tmp_path):
+    """`--set gap=2 --param gap=1,2`: the sweep runs over the grid and says so on stderr,
+    in one line, after its input was found valid."""
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root))
+    path = tmp_path / "override.h5"
+    proc = subprocess.run([sys.executable, "-m", "chaospound", "sweep", "--preset", "wall",
+                           "--set", "transient=2", "--set", "record=2", "--set", "gap=2",
+                           "--param", "gap=1,2", "-o", str(path), "--quiet"],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and "overrides --set gap=2" in lines[0], proc.stderr
+    assert path.exists()
