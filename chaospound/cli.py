@@ -5,6 +5,8 @@ Commands::
     chaospound presets [NAME]            table of presets, or one preset's TOML
     chaospound params [NAME ...]         flat parameter names, meaning and range
     chaospound simulate (--preset NAME | SCENE.toml) [--set k=v ...] [--json] ...
+    chaospound section (--preset NAME | SCENE.toml) [--phase P] [--cycles N] [--plot FILE] ...
+    chaospound impact-map (--preset NAME | SCENE.toml) [--plot FILE] [--json] ...
     chaospound sweep (--preset NAME | SCENE.toml) [--param NAME=GRID ...] -o FILE.h5 ...
     chaospound plot FILE.h5 [-o FILE.png|.pdf|.svg] [--branch NAME] [--dpi N] [--size W,H] ...
 
@@ -157,8 +159,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for add in (_add_presets, _add_params, _add_simulate, _add_lyapunov, _add_classify,
-                _add_sweep, _add_plot, _add_bench):
+    for add in (_add_presets, _add_params, _add_simulate, _add_section, _add_impact_map,
+                _add_lyapunov, _add_classify, _add_sweep, _add_plot, _add_bench):
         add(commands)
     return parser
 
@@ -490,6 +492,11 @@ def _add_simulate(commands: argparse._SubParsersAction) -> None:
     )
     out.add_argument("--output", metavar="FILE.json", help="also write the JSON to this file")
     out.add_argument("--overwrite", action="store_true", help="replace an existing --output")
+    out.add_argument("--plot", metavar="FILE.png",
+                     help="write the run's figure: time histories of the record window "
+                     "(displacements, rotations, clearance with the impacts, contact force) "
+                     "beside the phase diagrams (.png, .pdf or .svg; an existing figure is "
+                     "redrawn)")
     out.add_argument("--quiet", action="store_true",
                      help="no status line on stderr (compiling, running; shown on a terminal "
                      f"when the work takes more than {STATUS_DELAY_S:g} s)")
@@ -500,18 +507,48 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     if args.output is not None:
         check_output_path(args.output, overwrite=args.overwrite)
+    if args.plot is not None:
+        check_figure_path(args.plot)
+        if args.output is not None and os.path.abspath(args.plot) == os.path.abspath(args.output):
+            raise CliError(f"--plot {_path(args.plot)} is the --output file")
     _load_kernels(args.quiet)
     cycles = f"{scene.run.transient} transient + {scene.run.record} recorded cycles"
-    with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet):
+    with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet) as status:
         sim = _run_simulation(scene, args.trajectory)
+        if args.plot is not None:
+            status.set(f"drawing {scene.name}'s time histories and phase diagrams")
+            _simulation_save_plot(sim, args.trajectory, args.plot)
     document = _simulation_document(sim)
     if args.output is not None:
         write_json_file(document, args.output, overwrite=args.overwrite)
     if args.json:
         _emit(_json_text(document))
     else:
-        _emit(_simulation_report(sim, args.trajectory, args.output))
+        _emit(_simulation_report(sim, args.trajectory, args.output, args.plot))
     return EXIT_OK
+
+
+def _simulation_save_plot(sim: Simulation, samples_per_cycle: int, path: str) -> None:
+    """Time histories and phase diagrams of the run (rerun with dense samples unless the
+    run has at least :data:`PHASE_PLOT_SAMPLES` per cycle: the same steps, interpolated)."""
+    from chaospound.plot import plot_run
+
+    if samples_per_cycle < PHASE_PLOT_SAMPLES:
+        sim = _run_simulation(sim.scene, PHASE_PLOT_SAMPLES)
+    from chaospound.simulate import contact_history
+
+    _save_figure(plot_run(sim, contact_history(sim)), path)
+
+
+def _save_figure(fig, path: str) -> None:
+    """Write a figure atomically (redrawn if it exists); file errors become CliError."""
+    from chaospound.plot import save
+
+    check_figure_path(path)
+    try:
+        save(fig, path)
+    except OSError as exc:
+        raise CliError(f"cannot write {_path(path)}: {exc.strerror or exc}") from None
 
 
 def _run_simulation(scene: Scene, samples_per_cycle: int) -> Simulation:
@@ -542,7 +579,8 @@ def _solver_text(solver) -> str:
     return f"{solver.method}, rtol {solver.rtol:g}, atol {solver.atol:g}"
 
 
-def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | None) -> str:
+def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | None,
+                       plot: str | None = None) -> str:
     """Header, impact table and summary of one run, as text."""
     scene, imp = sim.scene, sim.impacts
     header = [
@@ -571,7 +609,10 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
         blocks.append(_table(IMPACT_COLUMNS, [IMPACT_UNITS, *rows], "rrrrlrrr"))
     else:
         blocks.append("no impacts in the record window")
-    blocks.append(_table(None, _summary(sim, samples_per_cycle, output), "ll"))
+    summary = _summary(sim, samples_per_cycle, output)
+    if plot is not None:
+        summary.append(("wrote", f"{plot} (time histories and phase diagrams)"))
+    blocks.append(_table(None, summary, "ll"))
     return "\n\n".join(blocks) + "\n"
 
 
@@ -602,6 +643,214 @@ def _summary(sim: Simulation, samples_per_cycle: int, output: str | None) -> lis
     if output is not None:
         rows.append(("wrote", output))
     return rows
+
+
+# ============================================================== section
+#: relative distance (to the section's size) within which two section points are one
+SECTION_TOL = 1e-6
+#: most section points listed by the text report (all are in the JSON)
+SECTION_ROWS = 12
+
+
+def _add_section(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "section",
+        help="stroboscopic Poincare section: the state once per excitation period",
+        description="The states at t = (phase + k) T for k = transient .. transient + cycles "
+        "(T the excitation period): a response of period P cycles gives P distinct points, "
+        "a quasi-periodic one a closed curve, a chaotic one a cloud. The report counts the "
+        "distinct points. --transient sets the cycles discarded first (the scene's, 40 "
+        "for the presets).",
+    )
+    add_scene_options(parser)
+    group = parser.add_argument_group("section")
+    group.add_argument("--cycles", type=_count, default=200, metavar="N",
+                       help="cycles recorded (200): N + 1 points")
+    group.add_argument("--tol", type=_positive_float, default=SECTION_TOL, metavar="TOL",
+                       help="two points closer than TOL times the section's size count as "
+                       f"one distinct point ({SECTION_TOL:g})")
+    out = parser.add_argument_group("output")
+    out.add_argument("--json", action="store_true", help="print one JSON document only")
+    out.add_argument("--plot", metavar="FILE.png", help="draw the points in the panels of the "
+                     "phase diagrams (.png, .pdf or .svg; an existing figure is redrawn)")
+    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
+    out.add_argument("--quiet", action="store_true",
+                     help="no status line on stderr (compiling, running; shown on a terminal "
+                     f"when the work takes more than {STATUS_DELAY_S:g} s)")
+    parser.set_defaults(func=_cmd_section)
+
+
+def _cmd_section(args: argparse.Namespace) -> int:
+    from chaospound.dynamics.poincare import stroboscopic_section
+
+    scene = scene_from_args(args)
+    if args.plot is not None:
+        check_figure_path(args.plot)
+    _load_kernels(args.quiet)
+    with _Status(f"section of {scene.name}: {scene.run.transient} transient + {args.cycles} "
+                 "cycles", quiet=args.quiet):
+        section = stroboscopic_section(scene, phase=scene.run.phase, cycles=args.cycles)
+    distinct, counts, size = distinct_points(section.states, args.tol)
+    if args.plot is not None:
+        from chaospound.plot import plot_strobe
+
+        fig = plot_strobe(section)
+        fig.suptitle(f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
+                     f"{section.model} model: section at phase {section.phase:g}, cycles "
+                     f"{int(section.cycles[0])}-{int(section.cycles[-1])}, {len(section)} "
+                     f"points, {len(distinct)} distinct")
+        _save_figure(fig, args.plot)
+    document = _with_units(section.to_json_dict())
+    document["transient_cycles"] = int(section.cycles[0])
+    document["distinct_points"] = len(distinct)
+    document["distinct_tol"] = args.tol
+    document["scene"] = scene.to_dict()
+    if args.json:
+        _emit(_json_text(document))
+        return EXIT_OK
+    header = [
+        ("scene", _scene_title(scene)),
+        ("model", f"{section.model} ({len(section.state_names)} states: "
+                  f"{' '.join(section.state_names)})"),
+        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {section.period:.6g})"),
+        ("section", f"t = ({section.phase:g} + k) T, k = {int(section.cycles[0])} .. "
+                    f"{int(section.cycles[-1])}: {len(section)} points"),
+        ("solver", _solver_text(scene.solver)),
+        ("distinct points", f"{len(distinct)} (within {args.tol:g} of the section's size "
+                            f"{size:.4g})"),
+    ]  # fmt: skip
+    names = section.state_names
+    rows = [(str(i + 1), str(n), *(f"{v:.6g}" for v in section.states[j]))
+            for i, (j, n) in enumerate(zip(distinct[:SECTION_ROWS], counts, strict=False))]
+    blocks = [_table(None, header, "ll"),
+              _table(("#", "points", *names), [("", "", *(_state_unit(n) for n in names)),
+                                               *rows], "rr" + "r" * len(names))]
+    if len(distinct) > SECTION_ROWS:
+        blocks.append(f"(first {SECTION_ROWS} of {len(distinct)} distinct points; all "
+                      "points in --json)")
+    tail = [("wall time", f"{_command_seconds():.3g} s the whole command")]
+    if args.plot is not None:
+        tail.append(("wrote", args.plot))
+    blocks.append(_table(None, tail, "ll"))
+    _emit("\n\n".join(blocks) + "\n")
+    return EXIT_OK
+
+
+def distinct_points(states, tol: float) -> tuple[list[int], list[int], float]:
+    """The distinct points of a section, in order of first appearance.
+
+    Two points are one when their distance is at most ``tol`` times the section's
+    size (the largest absolute state component over the points, at least 1e-300).
+
+    Returns
+    -------
+    (indices, counts, size)
+        The index of each distinct point's first occurrence, how many points
+        fall on it, and the size used.
+    """
+    import numpy as np
+
+    states = np.asarray(states, dtype=float)
+    size = float(max(np.max(np.abs(states), initial=0.0), 1e-300))
+    firsts: list[int] = []
+    counts: list[int] = []
+    for i, point in enumerate(states):
+        for k, j in enumerate(firsts):
+            if float(np.max(np.abs(point - states[j]))) <= tol * size:
+                counts[k] += 1
+                break
+        else:
+            firsts.append(i)
+            counts.append(1)
+    return firsts, counts, size
+
+
+def _state_unit(name: str) -> str:
+    """The unit row of a state column (lengths in A_g, rotations in rad, ...)."""
+    rate = name.startswith("d")
+    if name.lstrip("d").startswith("th"):
+        return "rad omega_Ax" if rate else "rad"
+    return "A_g omega_Ax" if rate else "A_g"
+
+
+# =========================================================== impact-map
+def _add_impact_map(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "impact-map",
+        help="impact map n -> n+1: phase and velocity of consecutive impacts",
+        description="Run a scene (transient, then record cycles) and list its impacts as "
+        "the map n -> n+1 of consecutive impacts: (phase_n, V_n) -> (phase_n+1, V_n+1), "
+        "with the corners. A response with n impacts per period repeats every n impacts "
+        "(n fixed points of the n-th iterate); a chaotic one spreads over a curve or a "
+        "cloud. --record sets the cycles recorded.",
+    )
+    add_scene_options(parser)
+    out = parser.add_argument_group("output")
+    out.add_argument("--json", action="store_true", help="print one JSON document only")
+    out.add_argument("--plot", metavar="FILE.png", help="draw the impact sequence and the "
+                     "return maps of phase and velocity (.png, .pdf or .svg; an existing "
+                     "figure is redrawn)")
+    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
+    out.add_argument("--quiet", action="store_true",
+                     help="no status line on stderr (compiling, running; shown on a terminal "
+                     f"when the work takes more than {STATUS_DELAY_S:g} s)")
+    parser.set_defaults(func=_cmd_impact_map)
+
+
+def _cmd_impact_map(args: argparse.Namespace) -> int:
+    from chaospound.dynamics.impact_map import impact_map
+
+    scene = scene_from_args(args)
+    if args.plot is not None:
+        check_figure_path(args.plot)
+    _load_kernels(args.quiet)
+    cycles = f"{scene.run.transient} transient + {scene.run.record} recorded cycles"
+    with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet):
+        sim = _run_simulation(scene, 0)
+    imap = impact_map(sim)
+    if args.plot is not None:
+        from chaospound.plot import plot_impact_map
+
+        fig = plot_impact_map(imap)
+        fig.suptitle(f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}: "
+                     f"{fig.get_suptitle()}, cycles {sim.transient}-"
+                     f"{sim.transient + sim.record - 1}")
+        _save_figure(fig, args.plot)
+    document = _with_units(imap.to_json_dict())
+    document["transient_cycles"] = sim.transient
+    document["record_cycles"] = sim.record
+    document["scene"] = scene.to_dict()
+    if args.json:
+        _emit(_json_text(document))
+        return EXIT_OK
+    header = [
+        ("scene", _scene_title(scene)),
+        ("model", sim.model),
+        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {sim.period:.6g})"),
+        ("cycles", f"{sim.transient} transient + {sim.record} recorded"),
+        ("solver", _solver_text(scene.solver)),
+    ]  # fmt: skip
+    blocks = [_table(None, header, "ll")]
+    labels = imap.labels
+    if len(imap) >= 2:
+        rows = [(str(i + 1), str(int(imap.cycle[i])), labels[i], f"{imap.phase[i]:.5f}",
+                 f"{imap.velocity[i]:.6g}", labels[i + 1], f"{imap.phase[i + 1]:.5f}",
+                 f"{imap.velocity[i + 1]:.6g}") for i in range(len(imap) - 1)]
+        columns = ("n", "cycle", "corner n", "phase n", "V n", "corner n+1", "phase n+1",
+                   "V n+1")
+        units = ("", "", "", "of T", "A_g omega_Ax", "", "of T", "A_g omega_Ax")
+        blocks.append(_table(columns, [units, *rows], "rrlrrlrr"))
+    else:
+        blocks.append(f"{len(imap)} impact{'' if len(imap) == 1 else 's'} in the record "
+                      "window: no pair n -> n+1")
+    tail = [("impacts", f"{len(imap)} ({len(imap) / sim.record:.4g} per cycle), "
+                        f"{max(len(imap) - 1, 0)} pairs")]
+    tail.append(("wall time", f"{_command_seconds():.3g} s the whole command"))
+    if args.plot is not None:
+        tail.append(("wrote", args.plot))
+    blocks.append(_table(None, tail, "ll"))
+    _emit("\n\n".join(blocks) + "\n")
+    return EXIT_OK
 
 
 # ================================================================ bench

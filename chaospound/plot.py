@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from .dynamics.impact_map import ImpactMap
     from .dynamics.lyapunov import LargestExponent, Spectrum
     from .dynamics.poincare import Section
-    from .simulate import Simulation
+    from .simulate import ContactHistory, Simulation
 
 __all__ = [
     "CORNER_COLORS",
@@ -46,7 +46,9 @@ __all__ = [
     "plot_impact_map",
     "plot_lyapunov_convergence",
     "plot_phase_diagrams",
+    "plot_run",
     "plot_strobe",
+    "plot_time_histories",
     "save",
 ]
 
@@ -69,6 +71,13 @@ VELOCITY_LABEL = r"$V/(A_g\,\omega_{Ax})$"
 PHASE_LABEL = r"phase $(t\ \mathrm{mod}\ T)/T$"
 EXPONENT_LABEL = r"$\lambda/\omega_{Ax}$ (per unit $t = \tau\omega_{Ax}$)"
 PERIOD_RATIO_LABEL = r"$T/T_{Ax}$"
+TIME_LABEL = r"normalised time $t = \tau\,\omega_{Ax}$"
+CLEARANCE_LABEL = r"clearance $-d_{max}/A_g$"
+FORCE_LABEL = r"contact force $F/(A_g\,k_{Ax})$"
+#: axes labels (Axes.get_label) of the time-history panels, for tests and callers
+HISTORY_PANELS = ("X", "Y", "th", "clearance", "force")
+_HISTORY_SYMBOLS = {"X": "$X_{}$", "Y": "$Y_{}$", "th": r"$\theta_{}$"}
+_HISTORY_UNITS = {"X": r"$X/A_g$", "Y": r"$Y/A_g$", "th": r"$\theta$ (rad)"}
 #: axis label of each sweep parameter: symbol and unit (MODEL.md section 1), never the
 #: raw flat name; see :func:`parameter_label`
 PARAMETER_LABELS = {
@@ -216,6 +225,127 @@ def _number_impacts(ax: Axes, xs: np.ndarray, vs: np.ndarray, cloud: np.ndarray)
         )
 
 
+# ============================================================ time histories
+def plot_time_histories(
+    simulation: Simulation, contact: ContactHistory, *, fig: Figure | None = None
+) -> Figure:
+    """Time histories of a run's record window: displacements, clearance, contact force.
+
+    One panel per kind of displacement the model has (X_A and X_B; Y_A and Y_B and
+    the rotations theta_A, theta_B for the torsional models), then the clearance
+    -d_max (the gap left at the contact line's closer end, 0 at contact) with every
+    impact's onset marked by its corner, then the resultant contact force. The
+    panels share the time axis (normalised time; excitation cycles on top). Each
+    panel's Axes is labelled (``Axes.get_label``) with its entry of
+    :data:`HISTORY_PANELS`.
+
+    Parameters
+    ----------
+    simulation : Simulation
+        A run with a dense trajectory.
+    contact : ContactHistory
+        :func:`chaospound.simulate.contact_history` of the same run.
+    fig : Figure or SubFigure, optional
+        An empty figure to draw into.
+
+    Returns
+    -------
+    Figure
+    """
+    traj = simulation.trajectory
+    if traj is None:
+        raise ValueError("the simulation has no trajectory: run simulate(scene, "
+                         "samples_per_cycle=N) with N > 0 for time histories")
+    names = simulation.state_names
+    groups = [(kind, [n for n in (f"{kind}_A", f"{kind}_B") if n in names])
+              for kind in HISTORY_PANELS[:3]]
+    groups = [(kind, present) for kind, present in groups if present]
+    n_panels = len(groups) + 2
+    if fig is None:
+        fig = Figure(figsize=(9.0, 1.9 * n_panels + 1.2), layout="constrained")
+    elif fig.axes:
+        raise ValueError("the figure already has axes: pass an empty Figure")
+    axes = list(fig.subplots(n_panels, 1, sharex=True, squeeze=False)[:, 0])
+    t = traj.time
+    titles = {"X": "displacements along x", "Y": "displacements along y", "th": "rotations"}
+    for ax, (kind, present) in zip(axes, groups, strict=False):
+        ax.set_label(kind)
+        for name, color in zip(present, ("C0", "C3"), strict=False):
+            tower = name[-1]
+            ax.plot(t, traj.state[:, names.index(name)], color=color, lw=0.9,
+                    label=f"tower {tower}: " + _HISTORY_SYMBOLS[kind].format(tower))
+        ax.set_ylabel(_HISTORY_UNITS[kind])
+        ax.legend(fontsize="small", frameon=False, loc="upper left", bbox_to_anchor=(1.0, 1.0),
+                  title=titles[kind], title_fontsize="small", alignment="left")
+    gap_ax, force_ax = axes[-2], axes[-1]
+    gap_ax.set_label("clearance")
+    gap_ax.plot(contact.time, contact.clearance, color="0.25", lw=0.9,
+                label=r"$-d_{max}$")
+    gap_ax.axhline(0.0, color="k", lw=0.5)
+    imp = simulation.impacts
+    in_window = (imp.time >= t[0]) & (imp.time <= t[-1])
+    labels = np.asarray(imp.labels, dtype=object)
+    for label, color in CORNER_COLORS.items():
+        mask = in_window & (labels == label)
+        if np.any(mask):
+            gap_ax.plot(imp.time[mask], np.zeros(int(mask.sum())), ls="none", marker="v",
+                        ms=6, color=color, label=f"impact {label}")
+    gap_ax.set_ylabel(CLEARANCE_LABEL)
+    gap_ax.set_title(f"clearance at the contact line, {int(in_window.sum())} impact onsets "
+                     "marked", fontsize="medium", loc="left")
+    gap_ax.legend(fontsize="small", frameon=False, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    force_ax.set_label("force")
+    force_ax.plot(contact.time, contact.force, color="C2", lw=0.9, label="contact force")
+    force_ax.set_ylabel(FORCE_LABEL)
+    force_ax.set_title(f"contact force, peak {float(np.max(contact.force, initial=0.0)):.4g}",
+                       fontsize="medium", loc="left")
+    force_ax.set_xlabel(TIME_LABEL)
+    force_ax.set_xlim(t[0], t[-1])
+    period = simulation.period
+    top = axes[0].secondary_xaxis("top", functions=(lambda x: x / period,
+                                                    lambda k: k * period))
+    top.set_xlabel("excitation cycles $t/T$")
+    return fig
+
+
+def plot_run(simulation: Simulation, contact: ContactHistory, *,
+             fig: Figure | None = None) -> Figure:
+    """A run at a glance: :func:`plot_time_histories` beside :func:`plot_phase_diagrams`.
+
+    Parameters
+    ----------
+    simulation : Simulation
+        A run of a scene with a dense trajectory.
+    contact : ContactHistory
+        :func:`chaospound.simulate.contact_history` of the same run.
+    fig : Figure, optional
+        An empty figure to draw into.
+
+    Returns
+    -------
+    Figure
+        With two subfigures: time histories (left) and phase diagrams (right).
+    """
+    panels = len(phase_panels(simulation.state_names))
+    rows = 2 if panels == 4 else 1
+    cols = 2 if panels == 4 else panels
+    histories = 2 + sum(any(f"{k}_{w}" in simulation.state_names for w in "AB")
+                        for k in HISTORY_PANELS[:3])
+    if fig is None:
+        height = max(1.9 * histories + 1.2, 4.3 * rows + 1.2)
+        fig = Figure(figsize=(9.0 + 4.6 * cols, height), layout="constrained")
+    elif fig.axes:
+        raise ValueError("the figure already has axes: pass an empty Figure")
+    left, right = fig.subfigures(1, 2, width_ratios=(9.0, 4.6 * cols), wspace=0.02)
+    plot_time_histories(simulation, contact, fig=left)
+    plot_phase_diagrams(simulation, fig=right)
+    scene = simulation.scene
+    left.suptitle(f"{scene.name}: time histories, cycles {simulation.transient}-"
+                  f"{simulation.transient + simulation.record - 1}")
+    right.suptitle("phase diagrams")
+    return fig
+
+
 # ================================================================ sections
 def plot_strobe(section: Section, *, fig: Figure | None = None) -> Figure:
     """Points of a Poincare section in the panels of :func:`plot_phase_diagrams`.
@@ -246,6 +376,7 @@ def plot_strobe(section: Section, *, fig: Figure | None = None) -> Figure:
         else:
             _scatter_by_corner(ax, x, v, section.labels)
         _style_panel(ax, title, position, rate)
+        _keep_visible_span(ax, x, v)
     if section.labels is not None and len(section):
         axes[0].legend(title="corner", fontsize="small", frameon=False)
     if section.kind == "stroboscopic":
@@ -259,11 +390,12 @@ def plot_strobe(section: Section, *, fig: Figure | None = None) -> Figure:
 
 # ============================================================== impact map
 def plot_impact_map(impact_map: ImpactMap, *, fig: Figure | None = None) -> Figure:
-    """The impact sequence (phase_n, V_n) and the return map V_n -> V_{n+1}.
+    """The impact sequence (phase_n, V_n) and the return maps of velocity and phase.
 
-    Left: every impact at its phase and velocity, coloured by corner. Right:
+    Left: every impact at its phase and velocity, coloured by corner. Middle:
     the pairs (V_n, V_{n+1}) coloured by the corner of impact n, with the
-    diagonal V_{n+1} = V_n (a period-1 impact sequence sits on it).
+    diagonal V_{n+1} = V_n (a period-1 impact sequence sits on it). Right: the
+    pairs (phase_n, phase_{n+1}), same colours.
 
     Parameters
     ----------
@@ -275,8 +407,8 @@ def plot_impact_map(impact_map: ImpactMap, *, fig: Figure | None = None) -> Figu
     -------
     Figure
     """
-    fig, axes = _panel_figure(fig, 2)
-    sequence, ret = axes
+    fig, axes = _panel_figure(fig, 3)
+    sequence, ret, phase_ret = axes
     labels = impact_map.labels
     _scatter_by_corner(sequence, impact_map.phase, impact_map.velocity, labels)
     sequence.set_xlim(0.0, 1.0)
@@ -299,6 +431,17 @@ def plot_impact_map(impact_map: ImpactMap, *, fig: Figure | None = None) -> Figu
     ret.set_xlabel(r"$V_n/(A_g\,\omega_{Ax})$")
     ret.set_ylabel(r"$V_{n+1}/(A_g\,\omega_{Ax})$")
     ret.set_title(r"return map $V_n \to V_{n+1}$ (colour: corner $n$)")
+    phase_pairs = impact_map.phase_pairs
+    _scatter_by_corner(phase_ret, phase_pairs[:, 0], phase_pairs[:, 1],
+                       labels[: phase_pairs.shape[0]])
+    phase_ret.plot([0.0, 1.0], [0.0, 1.0], ls="--", color="0.5", lw=0.8,
+                   label=r"$\varphi_{n+1} = \varphi_n$")
+    phase_ret.set_xlim(0.0, 1.0)
+    phase_ret.set_ylim(0.0, 1.0)
+    phase_ret.set_aspect("equal")
+    phase_ret.set_xlabel(r"phase $\varphi_n$ of impact $n$ (fraction of $T$)")
+    phase_ret.set_ylabel(r"phase $\varphi_{n+1}$ (fraction of $T$)")
+    phase_ret.set_title(r"return map $\varphi_n \to \varphi_{n+1}$")
     for ax in axes:
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize="small", frameon=False)
@@ -677,6 +820,27 @@ def axis_label(name: str) -> str:
     if rate:
         return rf"$\dot {kind}_{tower}/(A_g\,\omega_{{Ax}})$"
     return rf"${kind}_{tower}/A_g$"
+
+
+#: least span of a section panel's axis, relative to its values' size: points that
+#: coincide to rounding (a periodic orbit's strobe) show as one dot, not as noise
+#: magnified to fill the panel
+MIN_RELATIVE_SPAN = 0.02
+
+
+def _keep_visible_span(ax: Axes, x: np.ndarray, v: np.ndarray) -> None:
+    """Widen an axis whose points span less than MIN_RELATIVE_SPAN of their size."""
+    for values, set_lim, axis in ((x, ax.set_xlim, ax.xaxis), (v, ax.set_ylim, ax.yaxis)):
+        values = np.asarray(values, dtype=float)
+        values = values[np.isfinite(values)]
+        if values.size == 0:
+            continue
+        low, high = float(values.min()), float(values.max())
+        least = MIN_RELATIVE_SPAN * max(abs(low), abs(high), 1e-3)
+        if high - low < least:
+            centre = 0.5 * (low + high)
+            set_lim(centre - least, centre + least)
+            axis.get_major_formatter().set_useOffset(False)
 
 
 def _style_panel(ax: Axes, title: str, position: str, rate: str) -> None:

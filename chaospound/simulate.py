@@ -16,6 +16,7 @@ import numpy as np
 from .dynamics.system import SimulationError, System
 from .dynamics.system import raise_on_failure as _raise_on_failure
 from .kernels import integrate as kin
+from .kernels import models as kmodels
 from .kernels.params import (
     MODEL_DIMS,
     MODEL_NAMES,
@@ -28,12 +29,14 @@ from .kernels.rk import METHOD_NAMES
 from .scene import STATE_NAMES, Scene
 
 __all__ = [
+    "ContactHistory",
     "Impacts",
     "RunStats",
     "Simulation",
     "SimulationError",
     "Strobe",
     "Trajectory",
+    "contact_history",
     "simulate",
 ]
 
@@ -395,3 +398,65 @@ def kernels_cached() -> bool | None:
     from .kernels.jit import is_cached
 
     return is_cached(kin.run_cycles)
+
+
+@dataclass(frozen=True)
+class ContactHistory:
+    """The contact along a run's dense trajectory (the time-history figure's data).
+
+    Attributes
+    ----------
+    time : ndarray (n,)
+        The trajectory's sample times t (normalised time, t = tau omega_Ax).
+    penetration : ndarray (n,)
+        d_max = max(d_lo, d_hi), the larger penetration of the contact line's two
+        ends (units of A_g): > 0 in contact, < 0 apart.
+    clearance : ndarray (n,)
+        The gap left, -d_max (units of A_g): 0 at an impact's onset.
+    force : ndarray (n,)
+        The resultant compressive contact force on tower A along -x (units of
+        A_g k_Ax): 0 wherever the clearance is positive.
+    """
+
+    time: np.ndarray
+    penetration: np.ndarray
+    clearance: np.ndarray
+    force: np.ndarray
+
+
+def contact_history(simulation: Simulation) -> ContactHistory:
+    """Penetration, clearance and contact force at every sample of a run's trajectory.
+
+    Evaluated with the model's own contact geometry and forces (the kernels'
+    ``contact_ends`` and ``contact_forces``) at the dense samples.
+
+    Parameters
+    ----------
+    simulation : Simulation
+        A run of a scene with a dense trajectory (``samples_per_cycle`` > 0).
+
+    Returns
+    -------
+    ContactHistory
+    """
+    traj, scene = simulation.trajectory, simulation.scene
+    if traj is None:
+        raise ValueError("the simulation has no trajectory: run simulate(scene, "
+                         "samples_per_cycle=N) with N > 0")
+    if scene is None:
+        raise ValueError("contact histories need a scene's model (a custom system has its "
+                         "own gap function)")
+    model_id = MODEL_NAMES.index(simulation.model)
+    p = scene.pack(model_id)
+    ends = np.empty(4)
+    q = np.empty(6)
+    n = traj.time.shape[0]
+    penetration = np.empty(n)
+    force = np.empty(n)
+    for i in range(n):
+        t, y = float(traj.time[i]), traj.state[i]
+        kmodels.contact_ends(model_id, t, y, p, ends)
+        penetration[i] = max(ends[0], ends[1])
+        force[i] = kmodels.contact_forces(model_id, t, y, p, q)
+    return ContactHistory(time=traj.time.copy(), penetration=penetration,
+                          clearance=-penetration, force=force)

@@ -141,8 +141,8 @@ def test_impact_section_plot_is_coloured_by_corner():
 def test_impact_map_plot():
     imap = impact_map(fig3a_run())
     fig = plot.plot_impact_map(imap)
-    assert len(fig.axes) == 2
-    sequence, ret = fig.axes
+    assert len(fig.axes) == 3
+    sequence, ret, phase_ret = fig.axes
     assert "phase" in sequence.get_xlabel() and "A_g" in sequence.get_ylabel()
     assert "V_n" in ret.get_xlabel() and "V_{n+1}" in ret.get_ylabel()
     # every impact drawn once in the sequence, every pair once in the return map
@@ -150,6 +150,10 @@ def test_impact_map_plot():
     pairs = np.concatenate([c.get_offsets() for c in ret.collections])
     assert pairs.shape == imap.velocity_pairs.shape
     np.testing.assert_allclose(np.sort(pairs[:, 0]), np.sort(imap.velocity_pairs[:, 0]))
+    # the phase return map: every pair (phase_n, phase_n+1) once
+    phases = np.concatenate([c.get_offsets() for c in phase_ret.collections])
+    np.testing.assert_array_equal(np.sort(phases, axis=0), np.sort(imap.phase_pairs, axis=0))
+    assert "varphi_n" in phase_ret.get_xlabel() and "varphi_{n+1}" in phase_ret.get_ylabel()
     labels = {t.get_text() for t in sequence.get_legend().get_texts()}
     assert labels == {"A+", "B-"}
 
