@@ -15,9 +15,9 @@ move all of them together.
 Tables::
 
     meta(key TEXT PRIMARY KEY, value BLOB)
-        format, version, n_state, n_exponents, branches (JSON: name -> size),
-        attrs (JSON: the root attributes of the HDF5 file), grid (JSON: name ->
-        hex of the float64 bytes), created, wall_s
+        format, version, n_state, n_exponents, branches (JSON list), attrs (JSON:
+        the root attributes of the HDF5 file), created, wall_s
+    grid(axis INTEGER PRIMARY KEY, name TEXT, values BLOB)   float64 bytes
     orders(branch TEXT PRIMARY KEY, order BLOB)    visiting order, int64 bytes
     points(branch, idx, pos, status, regime, n_impacts, n_strobe, payload)
         one row per finished point; pos = position in the branch's visiting
@@ -86,8 +86,9 @@ class Journal:
         self.n_state = int(meta["n_state"])
         self.n_exponents = int(meta["n_exponents"])
         self.created = str(meta["created"])
-        self.grid = {name: np.frombuffer(bytes.fromhex(hexed), dtype=np.float64).copy()
-                     for name, hexed in json.loads(meta["grid"]).items()}
+        self.grid = {name: np.frombuffer(values, dtype=np.float64).copy()
+                     for name, values in conn.execute("SELECT name, \"values\" FROM grid "
+                                                      "ORDER BY axis")}
         self.orders = {b: np.frombuffer(o, dtype=np.int64).copy()
                        for b, o in conn.execute("SELECT branch, \"order\" FROM orders")}
         self.branches = list(json.loads(meta["branches"]))
@@ -108,6 +109,8 @@ class Journal:
         with conn:
             conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value BLOB)")
             conn.execute("CREATE TABLE orders (branch TEXT PRIMARY KEY, \"order\" BLOB)")
+            conn.execute("CREATE TABLE grid (axis INTEGER PRIMARY KEY, name TEXT, "
+                         "\"values\" BLOB)")
             conn.execute("CREATE TABLE points (branch TEXT, idx INTEGER, pos INTEGER, "
                          "status INTEGER, regime INTEGER, n_impacts INTEGER, "
                          "n_strobe INTEGER, payload BLOB, PRIMARY KEY (branch, idx))")
@@ -117,10 +120,11 @@ class Journal:
                 "attrs": json.dumps(attrs), "n_state": n_state, "n_exponents": n_exponents,
                 "created": created, "wall_s": 0.0,
                 "branches": json.dumps(list(orders)),
-                "grid": json.dumps({k: np.asarray(v, dtype=np.float64).tobytes().hex()
-                                    for k, v in grid.items()}),
             }
             conn.executemany("INSERT INTO meta VALUES (?, ?)", rows.items())
+            conn.executemany("INSERT INTO grid VALUES (?, ?, ?)",
+                             [(axis, name, np.asarray(values, dtype=np.float64).tobytes())
+                              for axis, (name, values) in enumerate(grid.items())])
             conn.executemany("INSERT INTO orders VALUES (?, ?)",
                              [(b, np.asarray(o, dtype=np.int64).tobytes())
                               for b, o in orders.items()])

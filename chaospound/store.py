@@ -734,25 +734,29 @@ def _write_branch(b: h5py.Group, journal: Journal, branch: str) -> None:
     b.attrs["strobe_committed"] = n_strobe
     b.attrs["REGIMES"] = json.dumps(REGIMES)
     b.create_dataset("order", data=order)
-    # every dataset is opened once: h5py drops a dataset's chunk cache when the object
-    # goes, and re-opening per batch would recompress each gzip chunk once per batch
-    compressed = {"compression": "gzip", "shuffle": True}
-    per_point = {name: b.create_dataset(name, shape=(n_points,), dtype=dtype, fillvalue=fill,
-                                        chunks=(min(n_points, CHUNK),), **compressed)
+    # every dataset is opened once (h5py drops a dataset's chunk cache with the object:
+    # re-opening per batch would recompress each gzip chunk once per batch), with a
+    # cache of two chunks (the one being filled and the next: points and rows are
+    # written in order), not HDF5's 1 MiB per dataset (30 MiB for a large sweep)
+    def dataset(group, name, shape, dtype, chunks, **options):
+        nbytes = 2 * int(np.prod(chunks)) * np.dtype(dtype).itemsize
+        return group.create_dataset(name, shape=shape, dtype=dtype, chunks=chunks,
+                                    compression="gzip", shuffle=True, rdcc_nbytes=nbytes,
+                                    rdcc_w0=1.0, **options)
+
+    rows = min(n_points, CHUNK)
+    per_point = {name: dataset(b, name, (n_points,), dtype, (rows,), fillvalue=fill)
                  for name, (dtype, fill) in SCALARS.items()}
     widths = {"final_state": n_state, **({"exponents": k} if k else {})}
     for name, width in widths.items():
-        per_point[name] = b.create_dataset(name, shape=(n_points, width), dtype=np.float64,
-                                           fillvalue=np.nan, chunks=(min(n_points, CHUNK), width),
-                                           **compressed)
+        per_point[name] = dataset(b, name, (n_points, width), np.float64, (rows, width),
+                                  fillvalue=np.nan)
     group = b.create_group("impacts")
-    imp = {field: group.create_dataset(field, shape=(n_impacts,), maxshape=(None,),
-                                       dtype=np.int8 if field == "corner" else np.float64,
-                                       chunks=(CHUNK,), **compressed)
+    imp = {field: dataset(group, field, (n_impacts,), np.int8 if field == "corner"
+                          else np.float64, (CHUNK,), maxshape=(None,))
            for field in IMPACT_FIELDS}
-    strobe = b.create_group("strobe").create_dataset(
-        "state", shape=(n_strobe, n_state), maxshape=(None, n_state), dtype=np.float64,
-        chunks=(CHUNK // 4, n_state), **compressed)
+    strobe = dataset(b.create_group("strobe"), "state", (n_strobe, n_state), np.float64,
+                     (CHUNK // 4, n_state), maxshape=(None, n_state))
     imp_row = strobe_row = 0
     for batch in journal.rows_in_order(branch, CONSOLIDATE_BATCH):
         point = _unpack(batch, n_state, k)
@@ -860,9 +864,10 @@ def _short(exc: Exception) -> str:
 
 
 def _check_same_sweep(stored: dict, path, meta) -> None:
-    try:
-        same = (json.loads(stored["sweep"]) == json.loads(meta["sweep"])
-                and stored["scene"] == meta["scene"])
+    try:  # the same code wrote both: equal text (parsing 1e5 grid values costs memory)
+        same = stored["scene"] == meta["scene"] and (
+            stored["sweep"] == meta["sweep"]
+            or json.loads(stored["sweep"]) == json.loads(meta["sweep"]))
     except (KeyError, TypeError, ValueError):
         same = False
     if not same:
