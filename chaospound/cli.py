@@ -39,6 +39,7 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, NoReturn
 
 from chaospound.messages import QUOTE_LIMIT, shorten
+from chaospound.units import UNITS
 
 if TYPE_CHECKING:
     from chaospound.scene import Scene
@@ -75,18 +76,8 @@ EXIT_BROKEN_PIPE = 141  #: stdout closed early (128 + SIGPIPE), e.g. ``| head``
 RUN_OVERRIDES = ("transient", "record", "method", "rtol", "atol", "phase")
 #: columns of the readable impact table
 IMPACT_COLUMNS = ("#", "cycle", "phase", "velocity", "corner", "peak pen", "peak force", "duration")
-#: the units row under the impact table's header (MODEL.md section 1, as UNITS)
+#: the units row under the impact table's header (chaospound.units.UNITS)
 IMPACT_UNITS = ("", "", "of T", "A_g omega_Ax", "", "A_g", "A_g k_Ax", "1/omega_Ax")
-#: the ``units`` object of every JSON document (values as chaospound.store.UNITS, the
-#: sweep file's)
-UNITS = {
-    "time": "normalised, t = tau omega_Ax",
-    "length": "A_g (ground displacement amplitude)",
-    "velocity": "A_g omega_Ax",
-    "force": "A_g k_Ax",
-    "exponents": "per unit normalised time (multiply by the period T for per cycle)",
-    "phase": "fraction of the excitation period, in [0, 1)",
-}
 #: units of the wall-clock times in the JSON documents (``wall_s``)
 WALL_UNITS = {"wall_s": "seconds (wall clock)"}
 
@@ -206,6 +197,23 @@ def add_scene_options(parser: argparse.ArgumentParser, *, run: bool = True) -> N
     group.add_argument("--rtol", metavar="R", help="relative tolerance")
     group.add_argument("--atol", metavar="A", help="absolute tolerance")
     group.add_argument("--phase", metavar="F", help="section phase, a fraction of the period")
+
+
+def add_output_options(parser: argparse.ArgumentParser, *, plot_help: str,
+                       quiet_help: str = "status") -> argparse._ArgumentGroup:
+    """The output options of an analysis command: --json, --plot, --quiet.
+
+    ``--overwrite`` is accepted and hidden: a figure is a derived product and is
+    redrawn; data files (.h5, .json) are never a --plot target.
+    """
+    out = parser.add_argument_group("output")
+    out.add_argument("--json", action="store_true", help="print one JSON document only")
+    out.add_argument("--plot", metavar="FILE.png", help=plot_help)
+    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)
+    out.add_argument("--quiet", action="store_true",
+                     help=f"no {quiet_help} line on stderr (compiling, running; shown on a "
+                     f"terminal when the work takes more than {STATUS_DELAY_S:g} s)")
+    return out
 
 
 def scene_from_args(args: argparse.Namespace) -> Scene:
@@ -669,14 +677,9 @@ def _add_section(commands: argparse._SubParsersAction) -> None:
     group.add_argument("--tol", type=_positive_float, default=SECTION_TOL, metavar="TOL",
                        help="two points closer than TOL times the section's size count as "
                        f"one distinct point ({SECTION_TOL:g})")
-    out = parser.add_argument_group("output")
-    out.add_argument("--json", action="store_true", help="print one JSON document only")
-    out.add_argument("--plot", metavar="FILE.png", help="draw the points in the panels of the "
-                     "phase diagrams (.png, .pdf or .svg; an existing figure is redrawn)")
-    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
-    out.add_argument("--quiet", action="store_true",
-                     help="no status line on stderr (compiling, running; shown on a terminal "
-                     f"when the work takes more than {STATUS_DELAY_S:g} s)")
+    add_output_options(parser, plot_help="draw the points in the panels of the "
+                     "phase diagrams (.png, .pdf or .svg; an existing figure is redrawn)",
+                       quiet_help="status")
     parser.set_defaults(func=_cmd_section)
 
 
@@ -785,15 +788,10 @@ def _add_impact_map(commands: argparse._SubParsersAction) -> None:
         "cloud. --record sets the cycles recorded.",
     )
     add_scene_options(parser)
-    out = parser.add_argument_group("output")
-    out.add_argument("--json", action="store_true", help="print one JSON document only")
-    out.add_argument("--plot", metavar="FILE.png", help="draw the impact sequence and the "
+    add_output_options(parser, plot_help="draw the impact sequence and the "
                      "return maps of phase and velocity (.png, .pdf or .svg; an existing "
-                     "figure is redrawn)")
-    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
-    out.add_argument("--quiet", action="store_true",
-                     help="no status line on stderr (compiling, running; shown on a terminal "
-                     f"when the work takes more than {STATUS_DELAY_S:g} s)")
+                     "figure is redrawn)",
+                       quiet_help="status")
     parser.set_defaults(func=_cmd_impact_map)
 
 
@@ -925,14 +923,9 @@ def _add_lyapunov(commands: argparse._SubParsersAction) -> None:
         help="also the largest exponent from two nearby trajectories "
         f"(separation {LYAPUNOV_SEPARATION:g}, rtol tightened to <= {LYAPUNOV_TWO_RTOL:g})",
     )
-    out = parser.add_argument_group("output")
-    out.add_argument("--json", action="store_true", help="print one JSON document only")
-    out.add_argument("--plot", metavar="FILE.png", help="write the convergence figure (.png, "
-                     ".pdf or .svg; an existing figure is redrawn)")
-    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
-    out.add_argument("--quiet", action="store_true",
-                     help="no status line on stderr (compiling, running; shown on a terminal "
-                     f"when the work takes more than {STATUS_DELAY_S:g} s)")
+    add_output_options(parser, plot_help="write the convergence figure (.png, "
+                     ".pdf or .svg; an existing figure is redrawn)",
+                       quiet_help="status")
     parser.set_defaults(func=_cmd_lyapunov)
 
 
@@ -1150,14 +1143,9 @@ def _add_classify(commands: argparse._SubParsersAction) -> None:
         help="cycles averaged for the largest exponent when there is no period (200)",
     )
     group.add_argument("--no-01", action="store_true", help="skip the 0-1 test for chaos")
-    out = parser.add_argument_group("output")
-    out.add_argument("--json", action="store_true", help="print one JSON document only")
-    out.add_argument("--plot", metavar="FILE.png", help="write phase diagrams of the steady "
-                     "state (.png, .pdf or .svg; an existing figure is redrawn)")
-    out.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
-    out.add_argument("--quiet", action="store_true",
-                     help="no progress line on stderr (compiling, transient cycles, ...; shown "
-                     f"on a terminal when the work takes more than {STATUS_DELAY_S:g} s)")
+    add_output_options(parser, plot_help="write phase diagrams of the steady "
+                     "state (.png, .pdf or .svg; an existing figure is redrawn)",
+                       quiet_help="progress")
     parser.set_defaults(func=_cmd_classify)
 
 

@@ -146,12 +146,7 @@ def plot_phase_diagrams(simulation: Simulation, *, fig: Figure | None = None) ->
     -------
     Figure
     """
-    traj = simulation.trajectory
-    if traj is None:
-        raise ValueError(
-            "the simulation has no trajectory: run simulate(scene, samples_per_cycle=N) "
-            "with N > 0 (a few hundred) for phase diagrams"
-        )
+    traj = _trajectory(simulation, "phase diagrams")
     panels = phase_panels(simulation.state_names)
     fig, axes = _panel_figure(fig, len(panels))
     period = simulation.period
@@ -252,10 +247,7 @@ def plot_time_histories(
     -------
     Figure
     """
-    traj = simulation.trajectory
-    if traj is None:
-        raise ValueError("the simulation has no trajectory: run simulate(scene, "
-                         "samples_per_cycle=N) with N > 0 for time histories")
+    traj = _trajectory(simulation, "time histories")
     names = simulation.state_names
     groups = [(kind, [n for n in (f"{kind}_A", f"{kind}_B") if n in names])
               for kind in HISTORY_PANELS[:3]]
@@ -909,3 +901,11 @@ def _category_colors(categories: Sequence[str]) -> dict[str, str]:
             "k" if category == "all" else next(spare)
         )
     return colors
+
+
+def _trajectory(simulation, purpose: str) -> np.ndarray:
+    """The run's dense trajectory, or a ValueError saying how to get one."""
+    if simulation.trajectory is None:
+        raise ValueError("the simulation has no trajectory: run simulate(scene, "
+                         f"samples_per_cycle=N) with N > 0 (a few hundred) for {purpose}")
+    return simulation.trajectory

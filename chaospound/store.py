@@ -71,6 +71,7 @@ from .journal import Journal, JournalError, fsync_dir, journal_path
 from .journal import remove as remove_journal
 from .lock import OutputBusy, OutputLock
 from .messages import shorten
+from .units import UNITS
 
 __all__ = ["FORMAT", "REGIMES", "StoreWriteError", "SweepFile", "SweepStoreError",
            "SweepWriter", "open_sweep"]
@@ -80,14 +81,6 @@ FORMAT_VERSION = 1
 REGIMES = ("pending", "none", "periodic", "group-periodic", "quasi-periodic", "chaotic",
            "unresolved", "failed")
 STATUS_PENDING, STATUS_DONE, STATUS_FAILED = 0, 1, 2
-UNITS = {
-    "time": "normalised, t = tau omega_Ax",
-    "length": "A_g (ground displacement amplitude)",
-    "velocity": "A_g omega_Ax",
-    "force": "A_g k_Ax",
-    "exponents": "per unit normalised time (multiply by the period T for per cycle)",
-    "phase": "fraction of the excitation period, in [0, 1)",
-}
 IMPACT_FIELDS = ("time", "phase", "velocity", "corner", "peak_penetration", "peak_force",
                  "duration")
 TIMING_FIELDS = ("wall_s", "created")
