@@ -677,19 +677,24 @@ def _add_section(commands: argparse._SubParsersAction) -> None:
     group.add_argument("--tol", type=_positive_float, default=SECTION_TOL, metavar="TOL",
                        help="two points closer than TOL times the section's size count as "
                        f"one distinct point ({SECTION_TOL:g})")
-    add_output_options(parser, plot_help="draw the points in the panels of the "
-                     "phase diagrams (.png, .pdf or .svg; an existing figure is redrawn)",
-                       quiet_help="status")
+    add_output_options(parser, plot_help="draw the points in the panels of the phase "
+                       "diagrams (.png, .pdf or .svg; an existing figure is redrawn)")
     parser.set_defaults(func=_cmd_section)
+
+
+def _scene_for_run(args: argparse.Namespace) -> Scene:
+    """The scene of a run command, its --plot path checked, the kernels loaded."""
+    scene = scene_from_args(args)
+    if args.plot is not None:
+        check_figure_path(args.plot)
+    _load_kernels(args.quiet)
+    return scene
 
 
 def _cmd_section(args: argparse.Namespace) -> int:
     from chaospound.dynamics.poincare import stroboscopic_section
 
-    scene = scene_from_args(args)
-    if args.plot is not None:
-        check_figure_path(args.plot)
-    _load_kernels(args.quiet)
+    scene = _scene_for_run(args)
     with _Status(f"section of {scene.name}: {scene.run.transient} transient + {args.cycles} "
                  "cycles", quiet=args.quiet):
         section = stroboscopic_section(scene, phase=scene.run.phase, cycles=args.cycles)
@@ -788,20 +793,15 @@ def _add_impact_map(commands: argparse._SubParsersAction) -> None:
         "cloud. --record sets the cycles recorded.",
     )
     add_scene_options(parser)
-    add_output_options(parser, plot_help="draw the impact sequence and the "
-                     "return maps of phase and velocity (.png, .pdf or .svg; an existing "
-                     "figure is redrawn)",
-                       quiet_help="status")
+    add_output_options(parser, plot_help="draw the impact sequence and the return maps of "
+                       "phase and velocity (.png, .pdf or .svg; an existing figure is redrawn)")
     parser.set_defaults(func=_cmd_impact_map)
 
 
 def _cmd_impact_map(args: argparse.Namespace) -> int:
     from chaospound.dynamics.impact_map import impact_map
 
-    scene = scene_from_args(args)
-    if args.plot is not None:
-        check_figure_path(args.plot)
-    _load_kernels(args.quiet)
+    scene = _scene_for_run(args)
     cycles = f"{scene.run.transient} transient + {scene.run.record} recorded cycles"
     with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet):
         sim = _run_simulation(scene, 0)
@@ -923,9 +923,8 @@ def _add_lyapunov(commands: argparse._SubParsersAction) -> None:
         help="also the largest exponent from two nearby trajectories "
         f"(separation {LYAPUNOV_SEPARATION:g}, rtol tightened to <= {LYAPUNOV_TWO_RTOL:g})",
     )
-    add_output_options(parser, plot_help="write the convergence figure (.png, "
-                     ".pdf or .svg; an existing figure is redrawn)",
-                       quiet_help="status")
+    add_output_options(parser, plot_help="write the convergence figure (.png, .pdf or .svg; "
+                       "an existing figure is redrawn)")
     parser.set_defaults(func=_cmd_lyapunov)
 
 
@@ -1143,9 +1142,8 @@ def _add_classify(commands: argparse._SubParsersAction) -> None:
         help="cycles averaged for the largest exponent when there is no period (200)",
     )
     group.add_argument("--no-01", action="store_true", help="skip the 0-1 test for chaos")
-    add_output_options(parser, plot_help="write phase diagrams of the steady "
-                     "state (.png, .pdf or .svg; an existing figure is redrawn)",
-                       quiet_help="progress")
+    add_output_options(parser, plot_help="write phase diagrams of the steady state (.png, "
+                       ".pdf or .svg; an existing figure is redrawn)", quiet_help="progress")
     parser.set_defaults(func=_cmd_classify)
 
 
