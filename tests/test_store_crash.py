@@ -430,3 +430,25 @@ def test_dask_kill_storm(tmp_path, reference):
     """20 kills of Dask clients and workers, each followed by a resume."""
     seen = dask_storm(tmp_path, reference(1500), 1500, kills=20, seed=7)
     assert seen["client_killed"] >= 10 and seen["worker_killed"] >= 2, seen
+
+
+def test_read_only_folder_is_one_line(tmp_path):
+    """An output in a read-only file system: exit 2, one line naming the folder, nothing
+    written (skipped where mounting is not allowed)."""
+    mount = tmp_path / "ro"
+    mount.mkdir()
+    if shutil.which("mount") is None or os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root and mount(8)")
+    proc = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=1m", "tmpfs", str(mount)],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {proc.stderr.strip()}")
+    try:
+        proc = subprocess.run(sweep_command(mount / "x.h5", 10), env=env(),
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 2, proc.stderr
+        lines = proc.stderr.splitlines()
+        assert len(lines) == 1 and "cannot create files in" in lines[0], proc.stderr
+        assert list(mount.iterdir()) == []
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], capture_output=True)
