@@ -1453,7 +1453,10 @@ def _add_plot(commands: argparse._SubParsersAction) -> None:
         help="bifurcation diagram or regime map of a sweep file",
         description="Draw a sweep file: for one swept parameter the bifurcation diagram "
         "(impact velocity against the parameter, coloured by regime; a second panel with "
-        "the largest Lyapunov exponent when the sweep has exponents), for two a regime map; "
+        "the largest Lyapunov exponent and its error bars when the sweep has exponents; with "
+        "--orbit STATE the orbit diagram of that state at the stroboscopic section beside "
+        "it), for two a regime map (beside it the largest exponent as a colour map, blue "
+        "negative, red positive, grey without an exponent, when the sweep has exponents); "
         "forward and backward continuation overlaid on one axis (hysteresis), other "
         "branches side by side. A file still being written shows its finished points. "
         "The format follows the output's extension: .png (raster, see --dpi), .pdf or .svg "
