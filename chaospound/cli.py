@@ -1453,7 +1453,10 @@ def _add_plot(commands: argparse._SubParsersAction) -> None:
         help="bifurcation diagram or regime map of a sweep file",
         description="Draw a sweep file: for one swept parameter the bifurcation diagram "
         "(impact velocity against the parameter, coloured by regime; a second panel with "
-        "the largest Lyapunov exponent when the sweep has exponents), for two a regime map; "
+        "the largest Lyapunov exponent and its error bars when the sweep has exponents; with "
+        "--orbit STATE the orbit diagram of that state at the stroboscopic section beside "
+        "it), for two a regime map (beside it the largest exponent as a colour map, blue "
+        "negative, red positive, grey without an exponent, when the sweep has exponents); "
         "forward and backward continuation overlaid on one axis (hysteresis), other "
         "branches side by side. A file still being written shows its finished points. "
         "The format follows the output's extension: .png (raster, see --dpi), .pdf or .svg "
@@ -1476,6 +1479,10 @@ def _add_plot(commands: argparse._SubParsersAction) -> None:
     parser.add_argument("--ylim", type=_float_pair, metavar="MIN,MAX",
                         help="y range: the impact velocity, or the second parameter of a "
                         "regime map")
+    parser.add_argument("--orbit", metavar="STATE",
+                        help="also the orbit diagram of this state component (e.g. X_A; any "
+                        "state of the sweep's model) at the stroboscopic section against the "
+                        "swept parameter, beside the impact velocities (one-parameter sweeps)")
     parser.add_argument("--overwrite", action="store_true", help=argparse.SUPPRESS)  # not needed
     parser.set_defaults(func=_cmd_plot)
 
@@ -1497,14 +1504,23 @@ def _cmd_plot(args: argparse.Namespace) -> int:
             raise CliError(f"--{option} {pair[0]:g},{pair[1]:g}: need MIN < MAX")
     if args.size is not None and min(args.size) <= 0:
         raise CliError(f"--size {args.size[0]:g},{args.size[1]:g}: need W > 0 and H > 0")
+    if args.orbit is not None:
+        if args.orbit not in sweep.state_names:
+            raise CliError(f"--orbit {args.orbit}: not a state of the {sweep.meta['model']} "
+                           f"model; choose one of {', '.join(sweep.state_names)}")
+        if len(sweep.parameters) != 1:
+            raise CliError(f"--orbit: needs a sweep over one parameter, this one is over "
+                           f"{' x '.join(sweep.parameters)}")
     branches = [args.branch] if args.branch is not None else list(sweep.branches)
-    fig = _sweep_figure(sweep, branches)
+    fig = _sweep_figure(sweep, branches, args.orbit)
     if args.size is not None:
         fig.set_size_inches(*args.size)
     for text in [fig.get_suptitle() and fig._suptitle, *(ax.title for ax in fig.axes)]:
         if text:
             text.set_wrap(True)  # a long title breaks into lines instead of running off
     for ax in fig.axes:
+        if ax.get_label() == "<colorbar>":
+            continue
         if args.xlim is not None:
             ax.set_xlim(*args.xlim)
         if args.ylim is not None and ax.get_label() == _MAIN_PANEL:
@@ -1515,6 +1531,10 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise CliError(f"cannot write {_path(output)}: {exc.strerror or exc}") from None
     kind = "bifurcation diagram" if len(sweep.parameters) == 1 else "regime map"
+    if args.orbit is not None:
+        kind += f" and orbit diagram of {args.orbit}"
+    elif len(sweep.parameters) == 2 and _has_exponents(sweep, branches):
+        kind += " and exponent map"
     _emit(f"wrote {output}: {kind} of {' x '.join(sweep.parameters)}, "
           f"branch {', '.join(branches)}")
     return EXIT_OK
@@ -1545,6 +1565,10 @@ def _float_pair(text: str) -> tuple[float, float]:
 
 #: label of the panels that --ylim applies to (impact velocity, regime map)
 _MAIN_PANEL = "main"
+#: label of the exponent panels (1 parameter: lambda against it; 2: the exponent map)
+_EXPONENT_PANEL = "exponents"
+#: label of the orbit-diagram panels (plot --orbit)
+_ORBIT_PANEL = "orbit"
 
 
 #: map colour of each stored regime code (chaospound.store.REGIMES); the regimes
@@ -1552,73 +1576,173 @@ _MAIN_PANEL = "main"
 _MAP_EXTRA_COLORS = {"pending": "white", "unresolved": "C4", "failed": "black"}
 
 
-def _sweep_figure(sweep, branches: Sequence[str]):
+def _sweep_figure(sweep, branches: Sequence[str], orbit: str | None = None):
     """The figure of ``chaospound plot``.
 
     One parameter: :func:`chaospound.plot.plot_bifurcation` per branch, one column each
-    (two rows with Lyapunov exponents), except forward and backward together, which
-    :func:`chaospound.plot.plot_hysteresis` overlays on one axis; two parameters: a
-    regime map per branch. Axes are labelled with symbols and units
-    (:func:`chaospound.plot.parameter_label`).
+    (two rows when the sweep has Lyapunov exponents, with error bars, in every
+    classification mode), except forward and backward together, which
+    :func:`chaospound.plot.plot_hysteresis` overlays on one axis; with ``orbit`` (a
+    state name) the orbit diagram of that component at the stroboscopic section
+    beside it (:func:`chaospound.plot.plot_orbit_diagram`). Two parameters: a regime
+    map per branch, each with the largest exponent's colour map beside it when the
+    sweep has exponents (:func:`chaospound.plot.plot_exponent_map`). Axes are
+    labelled with symbols and units (:func:`chaospound.plot.parameter_label`).
     """
     from matplotlib.figure import Figure
 
-    from chaospound.plot import parameter_label, plot_bifurcation, plot_hysteresis
+    from chaospound.plot import parameter_label
 
     name = _scene_name(sweep)
+    labels = [parameter_label(p) for p in sweep.parameters]
+    with_exponents = _has_exponents(sweep, branches)
+    if len(sweep.parameters) == 2:
+        return _map_figure(sweep, branches, with_exponents, name, labels)
+    title = f"{name}: impact velocity against {labels[0]} ({sweep.meta['model']} model)"
+    if orbit is None:
+        fig = _spectrum_figure(None, sweep, branches, with_exponents, labels)
+        fig.suptitle(title)
+        return fig
+    hysteresis = sorted(branches) == ["backward", "forward"]
+    cols = 1 if hysteresis else len(branches)
+    fig = Figure(figsize=(2 * (9.0 if hysteresis else 8.0 * cols), 7.0 if with_exponents
+                          else 5.0), layout="constrained")
+    left, right = fig.subfigures(1, 2, wspace=0.02)
+    _spectrum_figure(left, sweep, branches, with_exponents, labels)
+    _orbit_panels(right, sweep, branches, orbit, labels[0], hysteresis)
+    left.suptitle("impact velocity spectrum")
+    right.suptitle(f"orbit diagram: {orbit} at the stroboscopic section")
+    fig.suptitle(f"{name}: impact velocity and {orbit} against {labels[0]} "
+                 f"({sweep.meta['model']} model)")
+    return fig
+
+
+def _has_exponents(sweep, branches: Sequence[str]) -> bool:
+    """The sweep computed Lyapunov exponents (--lyapunov), or a classification stored some."""
+    import numpy as np
+
+    if int(sweep.sweep.get("lyapunov", 0)) != 0:
+        return True
+    return any(np.isfinite(sweep.array("max_exponent", b)).any() for b in branches)
+
+
+def _map_figure(sweep, branches, with_exponents: bool, name: str, labels: list[str]):
+    """Two parameters: a regime map per branch, the exponent map beside each."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from chaospound.plot import plot_exponent_map
+
     done = {b: sum(s != "pending" for s in sweep.status(b)) for b in branches}
     total = int(math.prod(sweep.shape))
-    labels = [parameter_label(p) for p in sweep.parameters]
-    if len(sweep.parameters) == 2:
-        cols = len(branches)
-        fig = Figure(figsize=(6.0 * cols + 1.5, 5.0), layout="constrained")
-        axes = fig.subplots(1, cols, squeeze=False, sharex=True, sharey=True)[0]
-        for ax, branch in zip(axes, branches, strict=True):
-            ax.set_label(_MAIN_PANEL)
-            _regime_map(ax, sweep, branch)
-            ax.set_title(_branch_title(branch, done[branch], total))
-        fig.suptitle(f"{name}: regimes over {labels[0]} and {labels[1]} "
-                     f"({sweep.meta['model']} model)")
-        return fig
-    parameter = sweep.parameters[0]
-    values = sweep.grid[parameter]
-    with_exponents = int(sweep.sweep.get("lyapunov", 0)) != 0
+    per_branch = 2 if with_exponents else 1
+    cols = per_branch * len(branches)
+    fig = Figure(figsize=(6.0 * cols + 1.5, 5.0), layout="constrained")
+    axes = fig.subplots(1, cols, squeeze=False, sharex=True, sharey=True)[0]
+    first, second = sweep.parameters
+    for j, branch in enumerate(branches):
+        ax = axes[per_branch * j]
+        ax.set_label(_MAIN_PANEL)
+        _regime_map(ax, sweep, branch)
+        ax.set_title(_branch_title(branch, done[branch], total))
+        if with_exponents:
+            lam_ax = axes[per_branch * j + 1]
+            lam_ax.set_label(_EXPONENT_PANEL)
+            status = np.asarray(sweep.status(branch), dtype=object).reshape(sweep.shape)
+            plot_exponent_map(
+                sweep.grid[first], sweep.grid[second],
+                np.asarray(sweep.array("max_exponent", branch), dtype=float)
+                .reshape(sweep.shape),
+                ax=lam_ax, missing=(status == "failed") | (status == "pending"),
+                x_label=labels[0], y_label=labels[1])
+            lam_ax.tick_params(labelleft=True)
+    what = "regimes and largest Lyapunov exponent" if with_exponents else "regimes"
+    fig.suptitle(f"{name}: {what} over {labels[0]} and {labels[1]} "
+                 f"({sweep.meta['model']} model)")
+    return fig
+
+
+def _spectrum_figure(fig, sweep, branches, with_exponents: bool, labels: list[str]):
+    """One parameter: the impact-velocity diagram of each branch (into ``fig`` or a new one)."""
+    from matplotlib.figure import Figure
+
+    from chaospound import plot
+    done = {b: sum(s != "pending" for s in sweep.status(b)) for b in branches}
+    total = int(math.prod(sweep.shape))
+    values = sweep.grid[sweep.parameters[0]]
     rows = 2 if with_exponents else 1
-    title = f"{name}: impact velocity against {labels[0]} ({sweep.meta['model']} model)"
+    ratios = (3, 1) if with_exponents else None
     if sorted(branches) == ["backward", "forward"]:  # hysteresis: one axis, both ways
-        fig = Figure(figsize=(9.0, 7.0 if with_exponents else 5.0), layout="constrained")
+        if fig is None:
+            fig = Figure(figsize=(9.0, 7.0 if with_exponents else 5.0), layout="constrained")
         axes = list(fig.subplots(rows, 1, sharex=True, squeeze=False,
-                                 height_ratios=(3, 1) if with_exponents else None)[:, 0])
+                                 height_ratios=ratios)[:, 0])
         axes[0].set_label(_MAIN_PANEL)
         order = ["forward", "backward"]
-        plot_hysteresis(
+        plot.plot_hysteresis(
             values,
             {b: sweep.impact_velocities(b) for b in order},
             exponents={b: sweep.array("max_exponent", b) for b in order}
+            if with_exponents else None,
+            exponent_errors={b: sweep.array("max_exponent_error", b) for b in order}
             if with_exponents else None,
             ax=axes,
             parameter_label=labels[0],
         )
         axes[0].set_title(", ".join(f"{b} {done[b]}/{total}" for b in order) + " points")
-        fig.suptitle(title)
         return fig
     cols = len(branches)
-    fig = Figure(figsize=(8.0 * cols, 7.0 if with_exponents else 5.0), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(8.0 * cols, 7.0 if with_exponents else 5.0), layout="constrained")
     grid = fig.subplots(rows, cols, squeeze=False, sharex=True, sharey="row",
-                        height_ratios=(3, 1) if with_exponents else None)
+                        height_ratios=ratios)
     for j, branch in enumerate(branches):
         grid[0, j].set_label(_MAIN_PANEL)
-        plot_bifurcation(
+        plot.plot_bifurcation(
             values,
             sweep.impact_velocities(branch),
             regimes=sweep.regimes(branch),
             exponents=sweep.array("max_exponent", branch) if with_exponents else None,
+            exponent_errors=sweep.array("max_exponent_error", branch)
+            if with_exponents else None,
             ax=list(grid[:, j]),
             parameter_label=labels[0],
         )
+        if with_exponents:
+            grid[1, j].set_label(_EXPONENT_PANEL)
         grid[0, j].set_title(_branch_title(branch, done[branch], total))
-    fig.suptitle(title)
     return fig
+
+
+def _orbit_panels(fig, sweep, branches, state: str, label: str, hysteresis: bool) -> None:
+    """The orbit diagram of one state component at the stroboscopic section: one axis
+    per branch, or forward and backward overlaid (hysteresis)."""
+    from chaospound.plot import BRANCH_STYLES, axis_label, plot_orbit_diagram
+
+    k = sweep.state_names.index(state)
+    values = sweep.grid[sweep.parameters[0]]
+    n = len(values)
+
+    def component(branch):
+        return [sweep.strobe(i, branch)[:, k] for i in range(n)]
+
+    if hysteresis:
+        ax = fig.add_subplot()
+        ax.set_label(_ORBIT_PANEL)
+        for branch in ("forward", "backward"):
+            style = BRANCH_STYLES[branch]
+            plot_orbit_diagram(values, component(branch), ax=ax, parameter_label=label,
+                               state_label=axis_label(state), color=style["color"],
+                               marker=style["marker"], label=f"{branch} {style['arrow']}")
+        ax.legend(fontsize="small", frameon=False)
+        return
+    axes = fig.subplots(1, len(branches), squeeze=False, sharey=True)[0]
+    for ax, branch in zip(axes, branches, strict=True):
+        ax.set_label(_ORBIT_PANEL)
+        plot_orbit_diagram(values, component(branch), ax=ax, regimes=sweep.regimes(branch),
+                           parameter_label=label, state_label=axis_label(state))
+        if branch != "fresh":
+            ax.set_title(f"{branch} continuation")
 
 
 def _branch_title(branch: str, done: int, total: int) -> str:

@@ -24,6 +24,7 @@ import tempfile
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
@@ -43,8 +44,10 @@ __all__ = [
     "plot_hysteresis",
     "phase_panels",
     "plot_bifurcation",
+    "plot_exponent_map",
     "plot_impact_map",
     "plot_lyapunov_convergence",
+    "plot_orbit_diagram",
     "plot_phase_diagrams",
     "plot_run",
     "plot_strobe",
@@ -564,6 +567,7 @@ def plot_bifurcation(
     ax: Axes | Sequence[Axes] | None = None,
     *,
     parameter_label: str = PERIOD_RATIO_LABEL,
+    exponent_errors: Sequence[float] | np.ndarray | None = None,
 ) -> Figure:
     """Impact velocity against a swept parameter (the paper's Figs. 4 and 5).
 
@@ -583,6 +587,8 @@ def plot_bifurcation(
     ax : Axes, or a pair of Axes with ``exponents``, optional
     parameter_label : str
         Label of the swept parameter's axis.
+    exponent_errors : sequence of m float, optional
+        Standard error of each exponent: error bars on the exponent panel.
 
     Returns
     -------
@@ -647,6 +653,7 @@ def plot_bifurcation(
             linewidths=0,
             c=[point_colors[i] for i in np.nonzero(finite)[0]],
         )
+        _exponent_error_bars(bottom, values, lam, exponent_errors, color="0.35")
         bottom.axhline(0.0, color="k", lw=0.5)
         bottom.set_ylabel(r"$\lambda_1/\omega_{Ax}$")
         bottom.set_xlabel(parameter_label)
@@ -669,6 +676,7 @@ def plot_hysteresis(
     ax: Axes | Sequence[Axes] | None = None,
     *,
     parameter_label: str = PERIOD_RATIO_LABEL,
+    exponent_errors: dict[str, Sequence[float] | np.ndarray] | None = None,
 ) -> Figure:
     """Forward and backward continuation overlaid on one axis (coexisting responses).
 
@@ -687,6 +695,8 @@ def plot_hysteresis(
         The largest exponent per point of each branch: a second panel below.
     ax : Axes, or a pair of Axes with ``exponents``, optional
     parameter_label : str
+    exponent_errors : dict, optional
+        The standard error of each branch's exponents: error bars.
 
     Returns
     -------
@@ -727,11 +737,187 @@ def plot_hysteresis(
             finite = np.isfinite(lam)
             bottom.plot(values[finite], lam[finite], color=style["color"], lw=0.7,
                         marker=style["marker"], ms=4, label=name)
+            _exponent_error_bars(bottom, values, lam, (exponent_errors or {}).get(name),
+                                 color=style["color"])
         bottom.axhline(0.0, color="k", lw=0.5)
         bottom.set_ylabel(r"$\lambda_1/\omega_{Ax}$")
         bottom.set_xlabel(parameter_label)
         top.set_xlabel("")
     return fig
+
+
+# ========================================================= exponent map
+#: colour of the points of an exponent map without an exponent (failed, pending)
+MISSING_COLOR = "0.75"
+
+
+def plot_exponent_map(
+    x_values: Sequence[float] | np.ndarray,
+    y_values: Sequence[float] | np.ndarray,
+    exponents: np.ndarray,
+    ax: Axes | None = None,
+    *,
+    missing: np.ndarray | None = None,
+    x_label: str = PERIOD_RATIO_LABEL,
+    y_label: str = "",
+    colorbar: bool = True,
+) -> Figure:
+    """The largest Lyapunov exponent over two parameters, as a colour map.
+
+    A diverging colour map centred on zero (``RdBu_r`` with a
+    :class:`~matplotlib.colors.TwoSlopeNorm`: blue negative, white zero, red
+    positive, each side scaled to its own extreme); points without an exponent
+    (NaN, or ``missing``: failed or pending) are masked and drawn grey
+    (:data:`MISSING_COLOR`). The mesh's array (``ax.collections[0].get_array()``)
+    is the masked ``exponents.T`` (rows: the second parameter).
+
+    Parameters
+    ----------
+    x_values : sequence of float (nx,)
+        The first parameter (x axis).
+    y_values : sequence of float (ny,)
+        The second parameter (y axis).
+    exponents : array (nx, ny)
+        Largest exponent per point, per unit normalised time ``t = tau omega_Ax``.
+    ax : Axes, optional
+    missing : bool array (nx, ny), optional
+        Points to mask besides the NaN ones.
+    x_label, y_label : str
+    colorbar : bool
+        Draw a colour bar labelled with the exponent's unit.
+
+    Returns
+    -------
+    Figure
+    """
+    from matplotlib.colors import TwoSlopeNorm
+
+    x = np.asarray(x_values, dtype=float).reshape(-1)
+    y = np.asarray(y_values, dtype=float).reshape(-1)
+    lam = np.asarray(exponents, dtype=float)
+    if lam.shape != (x.size, y.size):
+        raise ValueError(f"exponents has shape {lam.shape}, expected {(x.size, y.size)}")
+    mask = ~np.isfinite(lam)
+    if missing is not None:
+        mask |= np.asarray(missing, dtype=bool).reshape(lam.shape)
+    data = np.ma.masked_array(np.where(mask, 0.0, lam), mask=mask)
+    fig, ax = _single_axes(ax)
+    shown = data.compressed()
+    low = float(shown.min()) if shown.size else -1.0
+    high = float(shown.max()) if shown.size else 1.0
+    scale = max(abs(low), abs(high), 1e-12)
+    norm = TwoSlopeNorm(vcenter=0.0, vmin=low if low < 0 else -0.05 * scale,
+                        vmax=high if high > 0 else 0.05 * scale)
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad=MISSING_COLOR)
+    mesh = ax.pcolormesh(_cell_edges(x), _cell_edges(y), data.T, cmap=cmap, norm=norm,
+                         edgecolors="face")
+    ax.set_xlabel(x_label)
+    ax.set_ylabel(y_label)
+    if colorbar:
+        bar = ax.figure.colorbar(mesh, ax=ax)
+        bar.set_label(EXPONENT_LABEL)
+    n_missing = int(mask.sum())
+    ax.set_title("largest Lyapunov exponent" + (f" ({n_missing} points without, grey)"
+                                                if n_missing else ""), fontsize="medium")
+    return fig
+
+
+# ========================================================== orbit diagram
+def plot_orbit_diagram(
+    parameter_values: Sequence[float] | np.ndarray,
+    states_per_point: Sequence[np.ndarray],
+    ax: Axes | None = None,
+    *,
+    regimes: Sequence[str] | None = None,
+    parameter_label: str = PERIOD_RATIO_LABEL,
+    state_label: str = "",
+    color: str | None = None,
+    marker: str = "o",
+    label: str | None = None,
+) -> Figure:
+    """The classical bifurcation (orbit) diagram: a state component at a section
+    against the swept parameter.
+
+    Every point's section values (e.g. one component of its stroboscopic states)
+    are drawn at its parameter value in one scatter, in point order, so that
+    ``ax.collections[-1].get_offsets()[:, 1]`` is the concatenation of
+    ``states_per_point``. A periodic response of period k shows k dots, a
+    chaotic one a vertical smear.
+
+    Parameters
+    ----------
+    parameter_values : sequence of float (m,)
+    states_per_point : sequence of m 1-d arrays
+        The component's values at each point's section crossings (any length).
+    ax : Axes, optional
+    regimes : sequence of m str, optional
+        Colour each point by its regime's first word (:data:`REGIME_COLORS`).
+    parameter_label, state_label : str
+        Axis labels.
+    color : str, optional
+        One colour for all points (instead of ``regimes``).
+    marker : str
+    label : str, optional
+        Legend entry of the scatter.
+
+    Returns
+    -------
+    Figure
+    """
+    values = np.asarray(parameter_values, dtype=float).reshape(-1)
+    if len(states_per_point) != values.size:
+        raise ValueError(f"states_per_point has {len(states_per_point)} entries for "
+                         f"{values.size} parameter values")
+    if regimes is not None and len(regimes) != values.size:
+        raise ValueError(f"regimes has {len(regimes)} entries for {values.size} values")
+    fig, ax = _single_axes(ax)
+    per_point = [np.asarray(v, dtype=float).reshape(-1) for v in states_per_point]
+    counts = np.array([v.size for v in per_point], dtype=int)
+    x = np.repeat(values, counts)
+    y = np.concatenate(per_point) if per_point and counts.sum() else np.zeros(0)
+    if color is None and regimes is not None:
+        categories = [str(r).split()[0] if str(r).split() else "unknown" for r in regimes]
+        colors = _category_colors(categories)
+        point_colors = [colors[c] for c, n in zip(categories, counts, strict=True)
+                        for _ in range(n)]
+    else:
+        point_colors = color or "k"
+    ax.scatter(x, y, s=8, marker=marker, linewidths=0,
+               c=point_colors if len(x) else None, label=label)
+    if regimes is not None and color is None:
+        from matplotlib.lines import Line2D
+
+        present = dict.fromkeys(c for c, n in zip(categories, counts, strict=True) if n)
+        ax.legend(handles=[Line2D([], [], ls="none", marker="o", ms=4, color=colors[c],
+                                  label=c) for c in present],
+                  fontsize="small", frameon=False)
+    ax.set_xlabel(parameter_label)
+    ax.set_ylabel(state_label)
+    return fig
+
+
+def _exponent_error_bars(ax: Axes, values: np.ndarray, lam: np.ndarray, errors,
+                         color: str) -> None:
+    """Error bars (+- one standard error) on the finite exponents that have an error."""
+    if errors is None:
+        return
+    err = np.asarray(errors, dtype=float).reshape(-1)
+    if err.size != lam.size:
+        raise ValueError(f"exponent errors has {err.size} entries for {lam.size} exponents")
+    keep = np.isfinite(lam) & np.isfinite(err)
+    if np.any(keep):
+        ax.errorbar(values[keep], lam[keep], yerr=err[keep], fmt="none", ecolor=color,
+                    elinewidth=0.7, capsize=2.0, label="_exponent errors")
+
+
+def _cell_edges(values: np.ndarray) -> np.ndarray:
+    """Cell edges around grid values (midpoints; one value: +-5 %)."""
+    v = np.asarray(values, dtype=float)
+    if v.size == 1:
+        half = 0.05 * abs(v[0]) or 0.5
+        return np.array([v[0] - half, v[0] + half])
+    mid = 0.5 * (v[1:] + v[:-1])
+    return np.concatenate(([v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]))
 
 
 # ==================================================================== save

@@ -505,3 +505,136 @@ def test_paper_fig4_regimes_titles_stay_on_the_canvas(monkeypatch):
     for ax in fig.axes:
         box = ax.title.get_window_extent()
         assert box.x0 >= 0 and box.x1 <= width, ax.get_title()
+
+
+# ------------------------------- exponent maps and orbit diagrams (issue 17 items 2, 3)
+WALL_SWEEP = ["sweep", "--preset", "wall", "--set", "transient=20", "--set", "record=4",
+              "--param", "period_ratio=0.5:1.5#6", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def wall_sweeps(tmp_path_factory):
+    """Small wall sweeps: one parameter with exponents, two parameters with exponents,
+    and a converged one (long transient, tight tolerances) for periodic orbits."""
+    folder = tmp_path_factory.mktemp("maps")
+    one, two, tight = folder / "one.h5", folder / "two.h5", folder / "tight.h5"
+    lyapunov = ["--lyapunov", "--lyapunov-cycles", "10"]
+    assert main([*WALL_SWEEP, *lyapunov, "-o", str(one)]) == 0
+    assert main([*WALL_SWEEP, "--param", "gap=1,2", *lyapunov, "-o", str(two)]) == 0
+    assert main(["sweep", "--preset", "wall", "--set", "transient=300", "--set", "record=4",
+                 "--set", "rtol=1e-10", "--set", "atol=1e-12", "--param",
+                 "period_ratio=0.9,1.1,1.5", "--quiet", "-o", str(tight)]) == 0
+    return {"one": one, "two": two, "tight": tight}
+
+
+def panels(fig, label):
+    return [ax for ax in fig.axes if ax.get_label() == label]
+
+
+def test_exponent_map_is_the_stored_largest_exponent(wall_sweeps):
+    from matplotlib.colors import TwoSlopeNorm
+
+    from chaospound import cli
+    from chaospound.store import open_sweep
+
+    sweep = open_sweep(wall_sweeps["two"])
+    fig = cli._sweep_figure(sweep, sweep.branches)
+    [regimes] = panels(fig, "main")
+    [lam_ax] = panels(fig, "exponents")
+    [mesh] = lam_ax.collections
+    lam = sweep.array("max_exponent").reshape(sweep.shape)
+    status = np.asarray(sweep.status(), dtype=object).reshape(sweep.shape)
+    data = mesh.get_array()
+    assert data.shape == lam.T.shape  # rows: the second parameter (gap)
+    failed = (status == "failed") | (status == "pending") | ~np.isfinite(lam)
+    np.testing.assert_array_equal(np.ma.getmaskarray(data), failed.T)
+    np.testing.assert_array_equal(data.compressed(), lam.T[~failed.T])
+    assert np.isfinite(lam).all() and (status == "done").all()
+    # diverging, centred on zero, with a labelled colour bar in the exponent's unit
+    assert mesh.get_cmap().name.startswith("RdBu_r")
+    assert isinstance(mesh.norm, TwoSlopeNorm) and mesh.norm.vcenter == 0.0
+    [bar] = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    assert bar.get_ylabel() == plot.EXPONENT_LABEL and r"\omega_{Ax}" in bar.get_ylabel()
+    for ax in (regimes, lam_ax):
+        assert ax.get_xlabel() == r"$T/T_{Ax}$" and ax.get_ylabel() == r"$a/A_g$"
+    # a failed point is masked (grey), not drawn as an exponent
+    x, y = sweep.grid["period_ratio"], sweep.grid["gap"]
+    missing = np.zeros(lam.shape, dtype=bool)
+    missing[2, 1] = True
+    fig = plot.plot_exponent_map(x, y, lam, missing=missing)
+    data = fig.axes[0].collections[0].get_array()
+    assert np.ma.getmaskarray(data)[1, 2] and data.count() == lam.size - 1
+    assert tuple(fig.axes[0].collections[0].get_cmap().get_bad()[:3]) == pytest.approx(
+        (0.75, 0.75, 0.75))
+
+
+def test_one_parameter_exponent_panel_has_error_bars(wall_sweeps):
+    from chaospound import cli
+    from chaospound.store import open_sweep
+
+    sweep = open_sweep(wall_sweeps["one"])
+    fig = cli._sweep_figure(sweep, sweep.branches)
+    [lam_ax] = panels(fig, "exponents")
+    [bars] = lam_ax.containers
+    lam, err = sweep.array("max_exponent"), sweep.array("max_exponent_error")
+    segments = bars.lines[2][0].get_segments()
+    assert len(segments) == lam.size
+    for segment, value, error in zip(segments, lam, err, strict=True):
+        np.testing.assert_allclose(segment[:, 1], [value - error, value + error])
+    # kept whenever exponents exist, whatever the classification: here the sweep's
+    # own --lyapunov flag is hidden and the stored exponents decide
+    sweep.sweep["lyapunov"] = 0
+    assert len(panels(cli._sweep_figure(sweep, sweep.branches), "exponents")) == 1
+
+
+def test_orbit_diagram_draws_the_stored_strobe_component(wall_sweeps, capsys, monkeypatch):
+    import chaospound.plot
+    from chaospound.store import open_sweep
+
+    drawn = []
+    real_save = chaospound.plot.save
+    monkeypatch.setattr(chaospound.plot, "save", lambda fig, path, **kw: (
+        drawn.append(fig), real_save(fig, path, **kw)))
+    path = wall_sweeps["one"]
+    sweep = open_sweep(path)
+    for state in sweep.state_names:
+        code, out, err = run_cli(capsys, "plot", str(path), "--orbit", state)
+        assert code == 0, err
+        fig = drawn[-1]
+        assert len(panels(fig, "main")) == 1  # beside the impact-velocity spectrum
+        [orbit] = panels(fig, "orbit")
+        k = sweep.state_names.index(state)
+        offsets = orbit.collections[-1].get_offsets()
+        n = len(sweep.grid["period_ratio"])
+        expected_y = np.concatenate([sweep.strobe(i)[:, k] for i in range(n)])
+        expected_x = np.repeat(sweep.grid["period_ratio"], sweep.array("strobe_count"))
+        np.testing.assert_array_equal(offsets[:, 1], expected_y)
+        np.testing.assert_array_equal(offsets[:, 0], expected_x)
+        assert orbit.get_ylabel() == plot.axis_label(state)
+        assert orbit.get_xlabel() == r"$T/T_{Ax}$"
+    code, out, err = run_cli(capsys, "plot", str(path), "--orbit", "Q_A")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert all(name in err for name in sweep.state_names)
+
+
+def test_orbit_diagram_of_periodic_points_collapses_to_period_cycles_values(wall_sweeps):
+    from chaospound import cli
+    from chaospound.store import open_sweep
+
+    sweep = open_sweep(wall_sweeps["tight"])
+    fig = cli._sweep_figure(sweep, sweep.branches, orbit="X_A")
+    [orbit] = panels(fig, "orbit")
+    offsets = orbit.collections[-1].get_offsets()
+    periods = sweep.array("period_cycles")
+    regimes = sweep.regimes()
+    assert regimes.count("periodic") >= 2 and set(periods[:2]) == {1}
+    counts = sweep.array("strobe_count")
+    start = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    for i, regime in enumerate(regimes):
+        if regime.split()[0] != "periodic":
+            continue
+        ys = offsets[start[i]:start[i] + counts[i], 1]
+        p = int(periods[i])
+        np.testing.assert_allclose(ys[p:], ys[:-p], atol=1e-6)  # repeats after p cycles
+        distinct = 1 + np.count_nonzero(np.diff(np.sort(ys)) > 1e-6)
+        assert distinct == p  # period 1: every strobe point within 1e-6 of the others
