@@ -1760,13 +1760,13 @@ def _regime_map(ax, sweep, branch: str) -> None:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from chaospound.plot import REGIME_COLORS, parameter_label
+    from chaospound.plot import REGIME_COLORS, cell_edges, parameter_label
     from chaospound.store import REGIMES
 
     colors = [REGIME_COLORS.get(r) or _MAP_EXTRA_COLORS.get(r, "0.3") for r in REGIMES]
     codes = np.asarray(sweep.array("regime", branch)).reshape(sweep.shape)
     first, second = sweep.parameters
-    ax.pcolormesh(_cell_edges(sweep.grid[first]), _cell_edges(sweep.grid[second]), codes.T,
+    ax.pcolormesh(cell_edges(sweep.grid[first]), cell_edges(sweep.grid[second]), codes.T,
                   cmap=ListedColormap(colors), vmin=-0.5, vmax=len(REGIMES) - 0.5,
                   edgecolors="face")
     present = [(code, int(np.count_nonzero(codes == code))) for code in range(len(REGIMES))]
@@ -1776,18 +1776,6 @@ def _regime_map(ax, sweep, branch: str) -> None:
               frameon=False)
     ax.set_xlabel(parameter_label(first))
     ax.set_ylabel(parameter_label(second))
-
-
-def _cell_edges(values) -> object:
-    """Cell edges around sorted or unsorted grid values (midpoints; one value: +-5 %)."""
-    import numpy as np
-
-    v = np.asarray(values, dtype=float)
-    if v.size == 1:
-        half = 0.05 * abs(v[0]) or 0.5
-        return np.array([v[0] - half, v[0] + half])
-    mid = 0.5 * (v[1:] + v[:-1])
-    return np.concatenate(([v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]))
 
 
 def _scene_name(sweep) -> str:

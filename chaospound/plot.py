@@ -809,7 +809,7 @@ def plot_exponent_map(
     norm = TwoSlopeNorm(vcenter=0.0, vmin=low if low < 0 else -0.05 * scale,
                         vmax=high if high > 0 else 0.05 * scale)
     cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad=MISSING_COLOR)
-    mesh = ax.pcolormesh(_cell_edges(x), _cell_edges(y), data.T, cmap=cmap, norm=norm,
+    mesh = ax.pcolormesh(cell_edges(x), cell_edges(y), data.T, cmap=cmap, norm=norm,
                          edgecolors="face")
     ax.set_xlabel(x_label)
     ax.set_ylabel(y_label)
@@ -910,7 +910,7 @@ def _exponent_error_bars(ax: Axes, values: np.ndarray, lam: np.ndarray, errors,
                     elinewidth=0.7, capsize=2.0, label="_exponent errors")
 
 
-def _cell_edges(values: np.ndarray) -> np.ndarray:
+def cell_edges(values: np.ndarray) -> np.ndarray:
     """Cell edges around grid values (midpoints; one value: +-5 %)."""
     v = np.asarray(values, dtype=float)
     if v.size == 1:
