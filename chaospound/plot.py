@@ -766,7 +766,7 @@ def plot_exponent_map(
 
     A diverging colour map centred on zero (``RdBu_r`` with a
     :class:`~matplotlib.colors.TwoSlopeNorm`: blue negative, white zero, red
-    positive, each side scaled to its own extreme); points without an exponent
+    positive, symmetric about zero up to the largest |lambda|); points without an exponent
     (NaN, or ``missing``: failed or pending) are masked and drawn grey
     (:data:`MISSING_COLOR`). The mesh's array (``ax.collections[0].get_array()``)
     is the masked ``exponents.T`` (rows: the second parameter).
@@ -806,8 +806,9 @@ def plot_exponent_map(
     low = float(shown.min()) if shown.size else -1.0
     high = float(shown.max()) if shown.size else 1.0
     scale = max(abs(low), abs(high), 1e-12)
-    norm = TwoSlopeNorm(vcenter=0.0, vmin=low if low < 0 else -0.05 * scale,
-                        vmax=high if high > 0 else 0.05 * scale)
+    # symmetric: the same |lambda| has the same strength of colour on both sides, so a
+    # barely positive exponent is never drawn as deep red
+    norm = TwoSlopeNorm(vcenter=0.0, vmin=-scale, vmax=scale)
     cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad=MISSING_COLOR)
     mesh = ax.pcolormesh(cell_edges(x), cell_edges(y), data.T, cmap=cmap, norm=norm,
                          edgecolors="face")
