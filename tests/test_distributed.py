@@ -25,7 +25,6 @@ import sys
 import time
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pytest
 
@@ -67,26 +66,33 @@ def spec_of(scene, *grids: str, **options) -> SweepSpec:
 
 def assert_each_done_point_once(path) -> int:
     """Done points form a prefix of each branch's order, and the flat arrays hold the
-    rows of exactly those points, once each, in that order. Returns the done points."""
+    rows of exactly those points, once each, in that order (read from the sweep's journal
+    while it has one, else from the file). Returns the done points."""
     done_total = 0
-    with h5py.File(path, "r", locking=False) as f:
-        for branch in json.loads(f.attrs["sweep"])["branches"]:
-            g = f[branch]
-            order = g["order"][:]
-            status = g["status"][:][order]
-            done = int(np.count_nonzero(status != 0))
-            assert np.all(status[:done] != 0) and np.all(status[done:] == 0)
-            for flat, rows in (("impact", g["impacts"]["time"]), ("strobe", g["strobe"]["state"])):
-                counts = g[f"{flat}_count"][:][order][:done]
-                starts = g[f"{flat}_start"][:][order][:done]
-                expected = np.concatenate(([0], np.cumsum(counts)[:-1])) if done else counts
-                assert np.array_equal(starts, expected)
-                committed = int(g.attrs[f"{'impacts' if flat == 'impact' else 'strobe'}"
-                                        "_committed"])
-                assert committed == int(counts.sum())
-                assert rows.shape[0] >= committed  # an unfinished write may leave a tail
-            done_total += done
+    sweep = open_sweep(path)
+    for branch in sweep.branches:
+        order = sweep.array("order", branch)
+        status = sweep.array("status", branch)[order]
+        done = int(np.count_nonzero(status != 0))
+        assert np.all(status[:done] != 0) and np.all(status[done:] == 0)
+        data = sweep._data[branch]
+        for flat, rows in (("impact", data["impacts"]["time"]), ("strobe", data["strobe"])):
+            counts = sweep.array(f"{flat}_count", branch)[order][:done]
+            starts = sweep.array(f"{flat}_start", branch)[order][:done]
+            expected = np.concatenate(([0], np.cumsum(counts)[:-1])) if done else counts
+            assert np.array_equal(starts, expected)
+            assert rows.shape[0] == int(counts.sum())  # no row of an unfinished point
+        done_total += done
     return done_total
+
+
+def copy_sweep(source, target) -> None:
+    """Copy an interrupted sweep: its journal files (or its finished file)."""
+    source, target = Path(source), Path(target)
+    for path in source.parent.glob(source.name + ".journal*"):
+        shutil.copy(path, target.parent / path.name.replace(source.name, target.name, 1))
+    if source.exists():
+        shutil.copy(source, target)
 
 
 def assert_done_points_equal(path, reference) -> int:
@@ -333,7 +339,7 @@ def test_scheduler_killed_mid_sweep_then_resume(cluster, tmp_path):
 
     done = assert_each_done_point_once(path)
     assert 0 < done < n
-    shutil.copy(path, partial_copy)
+    copy_sweep(path, partial_copy)
     scene = scene_of(*options)
     spec = spec_of(scene, grid)
     full = tmp_path / "uninterrupted.h5"
