@@ -207,16 +207,16 @@ class SweepWriter:
         except OSError as exc:
             raise SweepStoreError(f"{self.path}: cannot create files in {self.path.parent} "
                                   f"({exc.strerror or exc})") from None
+        self._pos = {}  #: branch -> position of each grid index in the visiting order
+        for name, order in branches.items():
+            pos = np.empty(len(order), dtype=np.int64)
+            pos[np.asarray(order, dtype=np.int64)] = np.arange(len(order))
+            self._pos[name] = pos
         try:
             self._open(meta, grid, branches, resume, overwrite)
         except BaseException:
             self.close()
             raise
-        self._pos = {}
-        for name, order in branches.items():
-            pos = np.empty(len(order), dtype=np.int64)
-            pos[np.asarray(order, dtype=np.int64)] = np.arange(len(order))
-            self._pos[name] = pos
 
     def _open(self, meta, grid, branches, resume: bool, overwrite: bool) -> None:
         jpath = journal_path(self.path)
@@ -246,7 +246,7 @@ class SweepWriter:
                     return
                 created = str(_attr(f.attrs.get("created", "")))
                 self.journal = self._create_journal(jpath, create, created)
-                _import_unfinished(f, self.journal, branches)
+                _import_unfinished(f, self.journal, branches, self._pos)
             return
         self.journal = self._create_journal(jpath, create, time.strftime("%Y-%m-%dT%H:%M:%S"))
 
@@ -303,9 +303,7 @@ class SweepWriter:
         if not results:
             return
         pos = self._pos[branch]
-        rows = [(int(r.index), int(pos[r.index]), int(r.status), REGIMES.index(r.regime),
-                 len(r.impacts["time"]), int(r.strobe.shape[0]), _pack_result(r, self.n_exponents))
-                for r in results]
+        rows = [_journal_row(*_pack_result(r, self.n_exponents), pos) for r in results]
         elapsed = time.perf_counter() - self._started
         try:
             self.journal.commit(branch, rows, elapsed)
@@ -625,8 +623,16 @@ def _root_attributes(meta: dict) -> dict:
     return attrs
 
 
-def _pack_result(r: PointResult, n_exponents: int) -> bytes:
-    """A point's journal payload, from the worker's result."""
+def _journal_row(record: np.ndarray, blob: bytes, pos: np.ndarray) -> tuple:
+    """The journal's row of a packed point: (idx, pos, status, regime, impact and
+    stroboscopic row counts, payload), the columns read from its record."""
+    idx = int(record["index"])
+    return (idx, int(pos[idx]), int(record["status"]), int(record["regime"]),
+            int(record["impact_count"]), int(record["strobe_count"]), blob)
+
+
+def _pack_result(r: PointResult, n_exponents: int) -> tuple[np.ndarray, bytes]:
+    """A point's fixed record and its journal payload, from the worker's result."""
     record = np.zeros((), dtype=RECORD)
     message = r.message.encode("utf-8")[:MESSAGE_LENGTH]
     sequence = r.corner_sequence.encode("ascii")[:SEQUENCE_LENGTH]
@@ -646,7 +652,8 @@ def _pack_result(r: PointResult, n_exponents: int) -> bytes:
     exponents = None
     if n_exponents:
         exponents = r.exponents if r.exponents is not None else np.full(n_exponents, np.nan)
-    return _pack(record, r.final_state, exponents, r.impacts, r.strobe, message, sequence)
+    return record, _pack(record, r.final_state, exponents, r.impacts, r.strobe, message,
+                         sequence)
 
 
 def _pack(record: np.ndarray, final_state, exponents, impacts: dict, strobe, message: bytes,
@@ -784,7 +791,8 @@ def _is_finished(g: h5py.Group) -> bool:
                 and int(g.attrs.get("strobe_committed", -1)) == int(g["strobe_count"][()].sum()))
 
 
-def _import_unfinished(f: h5py.File, journal: Journal, branches: dict) -> None:
+def _import_unfinished(f: h5py.File, journal: Journal, branches: dict,
+                       positions: dict[str, np.ndarray]) -> None:
     """Copy the finished points of an unfinished in-place (version 0.1) file into a journal.
 
     The flat rows of the points marked done or failed are a prefix of the flat
@@ -794,8 +802,7 @@ def _import_unfinished(f: h5py.File, journal: Journal, branches: dict) -> None:
     for branch, order in branches.items():
         g = f[branch]
         status = g["status"][()]
-        pos = np.empty(len(order), dtype=np.int64)
-        pos[np.asarray(order)] = np.arange(len(order))
+        pos = positions[branch]
         arrays = {name: g[name][()] for name in (*SCALARS, "final_state",
                                                   *(("exponents",) if "exponents" in g else ()))}
         impacts = {name: g["impacts"][name][()] for name in IMPACT_FIELDS}
@@ -820,8 +827,7 @@ def _import_unfinished(f: h5py.File, journal: Journal, branches: dict) -> None:
             exponents = arrays["exponents"][i] if "exponents" in arrays else None
             blob = _pack(record, arrays["final_state"][i], exponents, point_impacts,
                          states[s:s + c], message, sequence)
-            rows.append((i, int(pos[i]), int(status[i]), int(record["regime"]),
-                         int(record["impact_count"]), int(record["strobe_count"]), blob))
+            rows.append(_journal_row(record, blob, pos))
         journal.commit(branch, rows, 0.0)
     journal.conn.execute("UPDATE meta SET value = ? WHERE key = 'wall_s'",
                          (float(f.attrs.get("wall_s", 0.0)),))

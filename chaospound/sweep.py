@@ -208,7 +208,6 @@ class SweepSummary:
     stored: int = 0  #: points in the file, from this and earlier runs
     finished_before: bool = False  #: resume found the file finished
 
-
     @property
     def points_per_second(self) -> float:
         return self.computed / self.wall_s if self.wall_s > 0 else float("nan")
@@ -518,8 +517,8 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
     if bar is not None:
         bar.close()
     return SweepSummary(path=path, points=plan.spec.n_points * len(plan.spec.branches),
-                        computed=done, regimes=regimes, failed=failed, wall_s=0.0, workers=0,
-                        messages=messages)
+                        computed=done, regimes={}, failed=0, wall_s=0.0, workers=0,
+                        messages=messages)  # regimes and failures: of the store, by run_sweep
 
 
 class _CtrlC:
