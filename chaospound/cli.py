@@ -736,11 +736,16 @@ def _cmd_section(args: argparse.Namespace) -> int:
     if len(distinct) > SECTION_ROWS:
         blocks.append(f"(first {SECTION_ROWS} of {len(distinct)} distinct points; all "
                       "points in --json)")
-    tail = [("wall time", f"{_command_seconds():.3g} s the whole command")]
-    if args.plot is not None:
-        tail.append(("wrote", args.plot))
-    blocks.append(_table(None, tail, "ll"))
-    _emit("\n\n".join(blocks) + "\n")
+    return _emit_report(blocks, [], args.plot)
+
+
+def _emit_report(blocks: list[str], tail: list[tuple[str, str]], plot: str | None) -> int:
+    """Print a command's text report: its blocks, then a last table with ``tail``, the
+    whole command's wall time and the figure written."""
+    tail = [*tail, ("wall time", f"{_command_seconds():.3g} s the whole command")]
+    if plot is not None:
+        tail.append(("wrote", plot))
+    _emit("\n\n".join([*blocks, _table(None, tail, "ll")]) + "\n")
     return EXIT_OK
 
 
@@ -843,12 +848,7 @@ def _cmd_impact_map(args: argparse.Namespace) -> int:
                       "window: no pair n -> n+1")
     tail = [("impacts", f"{len(imap)} ({len(imap) / sim.record:.4g} per cycle), "
                         f"{max(len(imap) - 1, 0)} pairs")]
-    tail.append(("wall time", f"{_command_seconds():.3g} s the whole command"))
-    if args.plot is not None:
-        tail.append(("wrote", args.plot))
-    blocks.append(_table(None, tail, "ll"))
-    _emit("\n\n".join(blocks) + "\n")
-    return EXIT_OK
+    return _emit_report(blocks, tail, args.plot)
 
 
 # ================================================================ bench
