@@ -321,8 +321,8 @@ def run_sweep(
         else:
             plan = _Plan(spec, orders, writer, chunk)
             summary = _execute(plan, backend, writer, progress, str(path))
-            writer.finish()
-        summary.regimes = writer.regime_counts()
+        summary.regimes = writer.regime_counts()  # from the journal, before it goes
+        writer.finish()
         summary.stored = sum(summary.regimes.values())
         summary.failed = summary.regimes.pop("failed", 0)
     finally:
