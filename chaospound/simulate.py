@@ -15,17 +15,17 @@ import numpy as np
 
 from .dynamics.system import SimulationError, System
 from .dynamics.system import raise_on_failure as _raise_on_failure
-from .kernels import integrate as kin
-from .kernels import models as kmodels
+from .engine import tables as kin
+from .engine.compose import Composition, Engine, engine_for
 from .kernels.params import (
     MODEL_DIMS,
     MODEL_NAMES,
     N_PARAMS,
+    P_HALF_L,
     P_PERIOD,
     P_PERIOD_RATIO,
     P_PHASE0,
 )
-from .kernels.rk import METHOD_NAMES
 from .scene import STATE_NAMES, Scene
 
 __all__ = [
@@ -206,7 +206,7 @@ class _SceneRun:
     transient: int
     record: int
     name: str
-    run_cycles: object
+    engine: Engine
     scene: Scene | None = None
 
     @classmethod
@@ -217,7 +217,10 @@ class _SceneRun:
                    state_names=STATE_NAMES[model_id], solver=scene.solver,
                    period=scene.period, t0=scene.run.phase * scene.period,
                    transient=scene.run.transient, record=scene.run.record, name=scene.name,
-                   run_cycles=kin.run_cycles, scene=scene)
+                   engine=engine_for(Composition(
+                       model=MODEL_NAMES[model_id], ground=scene.excitation.ground,
+                       method=scene.solver.method)),
+                   scene=scene)
 
     @classmethod
     def of_system(cls, system) -> _SceneRun:
@@ -233,7 +236,7 @@ class _SceneRun:
                    state_names=tuple(system.state_names), solver=system,
                    period=system.period, t0=float(system.params[P_PHASE0]),
                    transient=system.transient, record=8, name=system.name,
-                   run_cycles=system.run_cycles)
+                   engine=system.engine())
 
 
 def simulate(
@@ -288,8 +291,7 @@ def simulate(
     record = run.record if record is None else int(record)
     if transient < 0 or record < 1:
         raise ValueError(f"transient = {transient}, record = {record}: need >= 0 and >= 1")
-    model_id, n, p, solver, period, name = (run.model_id, run.n, run.p, run.solver,
-                                            run.period, run.name)
+    n, p, solver, period, name = run.n, run.p, run.solver, run.period, run.name
     if initial_state is None:
         y_start = run.initial_state.copy()
     else:
@@ -299,14 +301,13 @@ def simulate(
                 f"initial_state has shape {y_start.shape}: need {n} finite values "
                 f"({', '.join(run.state_names)})"
             )
-    method = METHOD_NAMES.index(solver.method)
     t0 = run.t0
     tau_start = 0.0 if (start_at_section or t0 == 0.0) else -t0
     h_fixed = period / solver.steps_per_cycle
     capacity = impact_capacity or max(64, 16 * (record + 1))
     n_rows_traj = samples_per_cycle * record + 1 if samples_per_cycle > 0 else 1
 
-    warm_up()
+    warm_up(run.engine)
     start = time.perf_counter()
     while True:
         y = y_start.copy()
@@ -316,8 +317,8 @@ def simulate(
         imp = np.zeros((capacity, kin.N_IMP_FIELDS))
         imp_state = np.zeros((capacity, n))
         stats = np.zeros(kin.N_STATS, dtype=np.int64)
-        n_imp = run.run_cycles(
-            model_id, method, p, y, clock, transient, transient + record,
+        n_imp = run.engine.run_cycles(
+            p, y, clock, transient, transient + record,
             solver.rtol, solver.atol, h_fixed, solver.max_steps, solver.restart_at_kinks,
             samples_per_cycle, strobe, traj, imp, imp_state, stats, _NO_TANGENT,
         )
@@ -369,35 +370,43 @@ def simulate(
     )
 
 
-_WARM = []
+_WARM: set = set()
 
 
-def warm_up() -> None:
-    """Load (or compile) the jitted integrator once per process, outside any timing.
+def warm_up(engine: Engine | None = None) -> None:
+    """Load (or compile) an engine once per process, outside any timing.
 
-    The cycle integrator is one compiled function for every model and method,
-    so a single tiny call makes later ``stats.wall_s`` measure the work alone.
+    A tiny call makes later ``stats.wall_s`` measure the work alone. Without
+    an argument: the engine of the default scene (fig3a's composition).
     """
-    if _WARM:
+    if engine is None:
+        engine = engine_for(DEFAULT_COMPOSITION)
+    if engine.composition in _WARM:
         return
-    y = np.zeros(2)
+    n = {"wall": 2, "tower-wall": 6, "pair": 4, "towers": 12}.get(engine.composition.model)
+    if n is None:  # reference and user systems: compiled by their first real run
+        return
+    y = np.zeros(n)
     p = np.zeros(N_PARAMS)
     p[P_PERIOD] = 1.0
     p[P_PERIOD_RATIO] = 1.0
+    p[P_HALF_L] = 0.5
     stats = np.zeros(kin.N_STATS, dtype=np.int64)
-    kin.run_cycles(0, 0, p, y, np.zeros(3), 0, 1, 1e-6, 1e-9, 0.1, 1, True, 0,
-                   np.zeros((2, 2)), np.zeros((1, 3)), np.zeros((0, kin.N_IMP_FIELDS)),
-                   np.zeros((0, 2)), stats, _NO_TANGENT)
-    _WARM.append(True)
+    engine.run_cycles(p, y, np.zeros(3), 0, 1, 1e-6, 1e-9, 0.1, 1, True, 0,
+                      np.zeros((2, n)), np.zeros((1, n + 1)), np.zeros((0, kin.N_IMP_FIELDS)),
+                      np.zeros((0, n)), stats, _NO_TANGENT)
+    _WARM.add(engine.composition)
 
 
-def kernels_cached() -> bool | None:
-    """Whether the cycle integrator, which every model, method and tangent run goes
-    through (the 30-60 s of a first run's compilation), loads from numba's disk cache;
-    None when unknown (see :func:`chaospound.kernels.jit.is_cached`)."""
-    from .kernels.jit import is_cached
+#: the composition of the default scene (the paper's towers, Hertz, sine, DOPRI5)
+DEFAULT_COMPOSITION = Composition(model="towers")
 
-    return is_cached(kin.run_cycles)
+
+def kernels_cached(composition: Composition | None = None) -> bool | None:
+    """Whether an engine (default: the default scene's) loads from numba's disk cache
+    (a first run compiles it: tens of seconds); None when unknown (see
+    :func:`chaospound.kernels.jit.is_cached`)."""
+    return engine_for(composition or DEFAULT_COMPOSITION).is_cached()
 
 
 @dataclass(frozen=True)
@@ -446,8 +455,9 @@ def contact_history(simulation: Simulation) -> ContactHistory:
     if scene is None:
         raise ValueError("contact histories need a scene's model (a custom system has its "
                          "own gap function)")
-    model_id = MODEL_NAMES.index(simulation.model)
-    p = scene.pack(model_id)
+    system = System.from_scene(scene)
+    kernels = system.engine().module
+    p = system.params
     ends = np.empty(4)
     q = np.empty(6)
     n = traj.time.shape[0]
@@ -455,8 +465,8 @@ def contact_history(simulation: Simulation) -> ContactHistory:
     force = np.empty(n)
     for i in range(n):
         t, y = float(traj.time[i]), traj.state[i]
-        kmodels.contact_ends(model_id, t, y, p, ends)
+        kernels.model_ends(t, y, p, ends)
         penetration[i] = max(ends[0], ends[1])
-        force[i] = kmodels.contact_forces(model_id, t, y, p, q)
+        force[i] = kernels.model_forces(t, y, p, q)
     return ContactHistory(time=traj.time.copy(), penetration=penetration,
                           clearance=-penetration, force=force)

@@ -85,8 +85,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..kernels.integrate import CORNER_LABELS
 from ..kernels.params import CUSTOM
+from ..physics.corners import CORNER_LABELS
 from ..scene import Scene
 from .system import System, as_system
 
@@ -253,7 +253,7 @@ def classify(
     from .lyapunov import lyapunov_spectrum
 
     system = as_system(system_or_scene)
-    if system.scene is None and not (system.model_id == CUSTOM and system.engine.has_gap):
+    if system.scene is None and not (system.model_id == CUSTOM and system.has_gap):
         raise ValueError(
             f"system {system.name!r} has no impacts to classify: use a pounding scene "
             "(a Scene or System.from_scene) or a custom system with a gap function"

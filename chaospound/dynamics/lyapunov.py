@@ -25,8 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels.models import jacobian_trace
-from ..kernels.params import CUSTOM, TANGENT
+from ..kernels.params import CUSTOM
 from ..scene import Scene
 from .system import System, advance, as_system
 
@@ -165,7 +164,7 @@ def lyapunov_spectrum(
         augmented[n * (i + 1) + i] = 1.0
     logs = np.zeros((cycles, k))
     total = tangent_transient + cycles
-    _, _, stats = advance(system, augmented, total, model_id=TANGENT + system.model_id,
+    _, _, stats = advance(system, augmented, total, tangent=True,
                           tangent_log=logs, record_from=tangent_transient)
     period = system.period
     exponents = logs.sum(axis=0) / (cycles * period)
@@ -195,7 +194,7 @@ def _constant_trace(system: System) -> float:
     """Trace of the Jacobian of a built-in model (constant); NaN for a custom system."""
     if system.model_id == CUSTOM:
         return float("nan")
-    return float(jacobian_trace(system.model_id, system.params))
+    return float(system.engine().module.model_trace(system.params))
 
 
 def largest_exponent_two_trajectory(

@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..kernels import integrate as kin
+from ..engine import tables as kin
 from ..kernels.params import P_PHASE0
 from ..scene import Scene
 from ..simulate import Simulation, simulate
@@ -190,8 +190,8 @@ def _system_section(system: System, phase: float, transient: int | None, cycles:
     clock = np.array([0.0, -params[P_PHASE0], 0.0])
     strobe = np.full((cycles + 1, n), np.nan)
     stats = np.zeros(kin.N_STATS, dtype=np.int64)
-    system.run_cycles(
-        system.model_id, system.method_id, params, y, clock, transient, transient + cycles,
+    system.engine().run_cycles(
+        params, y, clock, transient, transient + cycles,
         system.rtol, system.atol, period / system.steps_per_cycle, system.max_steps,
         system.restart_at_kinks, 0, strobe, np.zeros((1, n + 1)),
         np.zeros((0, kin.N_IMP_FIELDS)), np.zeros((0, n)), stats, np.zeros((0, 0)),

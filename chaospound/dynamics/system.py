@@ -17,7 +17,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..kernels import integrate as kin
+from ..engine import tables as kin
+from ..engine.compose import Composition, Engine, UserFunctions, engine_for
 from ..kernels.params import (
     CUSTOM,
     DUFFING,
@@ -25,6 +26,7 @@ from ..kernels.params import (
     MODEL_DIMS,
     N_PARAMS,
     P_PERIOD,
+    P_PERIOD_RATIO,
     P_PHASE0,
     REF_0,
     REF_1,
@@ -33,8 +35,8 @@ from ..kernels.params import (
     REF_4,
     SYSTEM_NAMES,
 )
-from ..kernels.rk import METHOD_NAMES
 from ..scene import STATE_NAMES, Scene
+from ..solvers.tableaux import METHOD_NAMES
 
 __all__ = ["SimulationError", "System", "advance", "custom_system", "duffing", "lorenz",
            "raise_on_failure"]
@@ -70,8 +72,12 @@ class System:
         The scene it came from, if any.
     n_states : int or None
         State dimension of a custom system (built-in models know theirs).
-    engine : object or None
-        A custom system's integrator (:func:`chaospound.kernels.custom.compile_engine`).
+    ground : str
+        The ground motion (a key of :data:`chaospound.engine.compose.GROUNDS`).
+    law : str
+        The contact law (a key of :data:`chaospound.engine.compose.LAWS`).
+    user : UserFunctions or None
+        A custom system's functions.
     """
 
     name: str
@@ -89,7 +95,9 @@ class System:
     transient: int = 40
     scene: Scene | None = field(default=None, compare=False)
     n_states: int | None = None
-    engine: object = field(default=None, compare=False, repr=False)
+    ground: str = "sine"
+    law: str = "hertz"
+    user: UserFunctions | None = field(default=None, compare=False, repr=False)
 
     @classmethod
     def from_scene(cls, scene: Scene) -> System:
@@ -111,6 +119,7 @@ class System:
             restart_at_kinks=solver.restart_at_kinks,
             transient=scene.run.transient,
             scene=scene,
+            ground=scene.excitation.ground,
         )
 
     @property
@@ -118,13 +127,20 @@ class System:
         return self.n_states if self.model_id == CUSTOM else MODEL_DIMS[self.model_id]
 
     @property
-    def run_cycles(self):
-        """The cycle integrator of this system (a custom system has its own)."""
-        return kin.run_cycles if self.engine is None else self.engine.run_cycles
+    def composition(self) -> Composition:
+        """What the engine integrates: model, contact law, ground motion, method."""
+        return Composition(model="user" if self.model_id == CUSTOM else self.model_name,
+                           law=self.law, ground=self.ground, method=self.method,
+                           user=self.user)
+
+    def engine(self, tangent: bool = False) -> Engine:
+        """The compiled engine of this system (with tangent vectors: ``tangent``)."""
+        return engine_for(self.composition.with_tangent(tangent))
 
     @property
-    def method_id(self) -> int:
-        return METHOD_NAMES.index(self.method)
+    def has_gap(self) -> bool:
+        """Whether the system has contact events (a custom system: a gap function)."""
+        return self.user is None or self.user.gap is not None
 
     @property
     def model_name(self) -> str:
@@ -152,7 +168,7 @@ def lorenz(sigma: float = 10.0, rho: float = 28.0, beta: float = 8.0 / 3.0, *,
     p[P_PERIOD] = interval
     return System(name="lorenz", model_id=LORENZ, params=p,
                   initial_state=np.array(initial_state, dtype=float), period=interval,
-                  state_names=("x", "y", "z"), transient=50, **solver)
+                  state_names=("x", "y", "z"), transient=50, ground="none", **solver)
 
 
 def duffing(damping: float = 0.05, linear: float = 0.0, cubic: float = 1.0,
@@ -171,10 +187,7 @@ def duffing(damping: float = 0.05, linear: float = 0.0, cubic: float = 1.0,
     p[P_PERIOD] = period
     return System(name="duffing", model_id=DUFFING, params=p,
                   initial_state=np.array(initial_state, dtype=float), period=period,
-                  state_names=("x", "dx"), transient=100, **solver)
-
-
-_ENGINE_CACHE: dict = {}  #: (rhs, jacobian, gap, n, n_params) -> compiled engine
+                  state_names=("x", "dx"), transient=100, ground="none", **solver)
 
 
 def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
@@ -214,10 +227,11 @@ def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
     Returns
     -------
     System
-        With model "custom". Its integrator is the built-in one with the model
-        layer replaced by these functions (:mod:`chaospound.kernels.custom`),
-        compiled on first use and shared by every system made of the same
-        functions.
+        With model "custom". Its integrator is the built-in one composed with
+        these functions as its model (:mod:`chaospound.engine.compose`),
+        compiled on first use. Functions importable by name from their module
+        (a file, not ``__main__`` or a notebook) are compiled once per machine
+        and loaded from numba's disk cache afterwards; others once per process.
 
     Raises
     ------
@@ -226,8 +240,6 @@ def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
         period, state, parameter vector or solver setting.
     """
     from numba.core.registry import CPUDispatcher
-
-    from ..kernels.custom import compile_engine, pack_custom
 
     for label, fn in (("rhs", rhs), ("jacobian", jacobian), ("gap", gap)):
         if fn is not None and not isinstance(fn, CPUDispatcher):
@@ -248,12 +260,24 @@ def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
     if len(names) != n:
         raise ValueError(f"state_names has {len(names)} names for {n} states")
     _check_user_functions(rhs, jacobian, gap, y0, q)
-    key = (rhs, jacobian, gap, n, q.size)
-    if key not in _ENGINE_CACHE:
-        _ENGINE_CACHE[key] = compile_engine(rhs, jacobian, gap, n, q.size)
     return System(name=name, model_id=CUSTOM, params=pack_custom(float(period), q, n),
                   initial_state=y0, period=float(period), state_names=names,
-                  transient=int(transient), n_states=n, engine=_ENGINE_CACHE[key], **solver)
+                  transient=int(transient), n_states=n, ground="none",
+                  user=UserFunctions.of(rhs, jacobian, gap, n, q.size), **solver)
+
+
+def pack_custom(period: float, q: np.ndarray, n: int) -> np.ndarray:
+    """The packed vector of a user system: header, ``q``, Jacobian scratch.
+
+    The header of :mod:`chaospound.kernels.params` carries the period
+    (``P_PERIOD``); the user's ``q`` follows from ``N_PARAMS``, then an ``n x n``
+    block that receives the Jacobian during a tangent run.
+    """
+    p = np.zeros(N_PARAMS + q.shape[0] + n * n)
+    p[P_PERIOD] = period
+    p[P_PERIOD_RATIO] = period / (2.0 * np.pi)
+    p[N_PARAMS:N_PARAMS + q.shape[0]] = q
+    return p
 
 
 def _check_user_functions(rhs, jacobian, gap, y0: np.ndarray, q: np.ndarray) -> None:
@@ -287,7 +311,7 @@ def _require_finite(label: str, values: np.ndarray) -> None:
         raise ValueError(f"{label} gave non-finite values on the initial state")
 
 
-def advance(system: System, state: np.ndarray, cycles: int, *, model_id: int | None = None,
+def advance(system: System, state: np.ndarray, cycles: int, *, tangent: bool = False,
             tangent_log: np.ndarray | None = None, record_from: int | None = None,
             from_time_zero: bool = False):
     """Integrate ``cycles`` periods from a section; return (state, clock, stats).
@@ -295,11 +319,11 @@ def advance(system: System, state: np.ndarray, cycles: int, *, model_id: int | N
     The run starts at the section (local time 0), or at t = 0 with
     ``from_time_zero`` (the scene's initial state), and ends on the section
     ``cycles`` periods later; contact events are landed on as in
-    :func:`chaospound.simulate.simulate`. With a tangent model id, the tangent
-    vectors are re-orthonormalised at every section and the logs of the
-    stretching factors of cycles ``record_from ..`` go to ``tangent_log``.
+    :func:`chaospound.simulate.simulate`. With ``tangent``, ``state`` holds the
+    state followed by tangent vectors, which are re-orthonormalised at every
+    section, and the logs of the stretching factors of cycles ``record_from ..``
+    go to ``tangent_log``.
     """
-    model = system.model_id if model_id is None else model_id
     y = np.array(state, dtype=np.float64, copy=True)
     n = y.shape[0]
     clock = np.zeros(3)
@@ -313,9 +337,10 @@ def advance(system: System, state: np.ndarray, cycles: int, *, model_id: int | N
     stats = np.zeros(kin.N_STATS, dtype=np.int64)
     log = np.zeros((0, 0)) if tangent_log is None else tangent_log
     h_fixed = system.period / system.steps_per_cycle
-    system.run_cycles(model, system.method_id, system.params, y, clock, k_record, cycles,
-                      system.rtol, system.atol, h_fixed, system.max_steps,
-                      system.restart_at_kinks, 0, strobe, traj, imp, imp_state, stats, log)
+    system.engine(tangent).run_cycles(system.params, y, clock, k_record, cycles, system.rtol,
+                                      system.atol, h_fixed, system.max_steps,
+                                      system.restart_at_kinks, 0, strobe, traj, imp, imp_state,
+                                      stats, log)
     status = int(stats[kin.ST_STATUS])
     if status != kin.STATUS_OK:
         raise_on_failure(status, stats, clock, system.period, system.max_steps, y)

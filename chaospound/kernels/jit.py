@@ -49,3 +49,9 @@ def is_cached(dispatcher) -> bool | None:
         return None
     return any(isinstance(key, tuple) and len(key) > 1 and key[1] == magic for key in overloads)
 
+
+
+#: as :data:`kernel` and :data:`inline`, without the disk cache: for engines built in
+#: memory (a user system whose functions cannot be imported by name)
+kernel_uncached = njit(_nrt=False, error_model="numpy")
+inline_uncached = njit(_nrt=False, error_model="numpy", forceinline=True)

@@ -5,13 +5,13 @@
 * Forced Duffing: ``x'' + d x' + a x + b x^3 = g cos(w t)``.
 
 They run through the same steppers, integrator and Lyapunov code as the
-pounding models (model ids LORENZ and DUFFING of :mod:`.params`).
+pounding models (the model templates :mod:`chaospound.physics.models.lorenz` and ``duffing``).
 """
 
 import math
 
-from .jit import kernel
-from .params import REF_0, REF_1, REF_2, REF_3, REF_4
+from chaospound.kernels.jit import kernel
+from chaospound.kernels.params import REF_0, REF_1, REF_2, REF_3, REF_4
 
 
 @kernel

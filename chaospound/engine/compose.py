@@ -1,0 +1,435 @@
+"""Compose, don't dispatch: one generated engine module per composition.
+
+A :class:`Composition` names each varying piece once, in Python: the structural
+model, the contact law, the ground motion, the Runge-Kutta method and whether
+tangent vectors ride along. :func:`engine_for` turns it into a module whose
+kernels call exactly those pieces, so no kernel ever branches on a kind of
+thing, and LLVM inlines the law and the ground into the right-hand side as if
+they had been written there:
+
+* the **text** is the template modules (:data:`TEMPLATES`: the model, the glue,
+  the steppers, the events and the loop), each cut at its ``# ==== template
+  ====`` line, joined with bindings of the names they leave free
+  (:mod:`.free`): ``law_*`` imported from the law's module, ``ground_*`` from
+  the ground motion's, the method's stepper, dense output, error and
+  controller, and the composition's constants (state size, contact ends,
+  block offsets);
+* the **file** is ``<cache>/composed/engine_<key>.py``; the key hashes the
+  text's sources (every module of the kernel packages), numba's and Python's
+  versions and the composition, so an edit anywhere yields a new module and
+  nothing is ever invalidated by hand; it is written atomically (a private
+  temporary file, fsync, ``os.replace``), so concurrent first runs (sweep
+  workers, Dask) are safe;
+* its kernels are ``cache=True``: numba's disk cache serves the second process
+  (docs/design/composition.md measured this variant: the same machine code as
+  direct calls, and cache hits).
+
+A user system (:func:`chaospound.dynamics.system.custom_system`) is composed the
+same way, its functions imported from their own module by name; functions that
+cannot be imported (defined in ``__main__``, a notebook, a closure) are bound
+into a module built in memory instead, compiled once per process.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import importlib
+import os
+import sys
+import threading
+import types
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..kernels.params import N_PARAMS, P_BETA, P_PERIOD_RATIO
+from ..solvers.tableaux import MAX_DENSE, MAX_STAGES, METHODS
+from .tables import MAX_EVENTS, N_SCALARS
+
+__all__ = ["Composition", "Engine", "UserFunctions", "cache_root", "engine_for",
+           "generate_source"]
+
+TEMPLATE_VERSION = "1"  #: part of every key: bump when the generator's output changes
+MARKER = "# ==== template ====\n"  #: where a template module's text starts
+
+#: the structural models: name -> template module (one registration line each)
+MODELS = {
+    "wall": "chaospound.physics.models.wall",
+    "tower-wall": "chaospound.physics.models.tower_wall",
+    "pair": "chaospound.physics.models.pair",
+    "towers": "chaospound.physics.models.towers",
+    "lorenz": "chaospound.physics.models.lorenz",
+    "duffing": "chaospound.physics.models.duffing",
+    "user": "chaospound.physics.models.user",
+}
+#: the contact laws: name -> module (one registration line each)
+LAWS = {
+    "hertz": "chaospound.physics.contact.hertz",
+}
+#: the ground motions: name -> module (one registration line each)
+GROUNDS = {
+    "sine": "chaospound.physics.ground.sine",
+    "none": "chaospound.physics.ground.none",
+}
+#: the engine's own templates, after the model's
+TEMPLATES = ("chaospound.engine.glue", "chaospound.solvers.steppers",
+             "chaospound.engine.events", "chaospound.engine.loop")
+LAW_FUNCTIONS = ("point_force", "point_stiffness", "point_force_rate", "point_potential",
+                 "line_force", "line_gradient", "line_force_rate", "line_potential")
+GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor")
+#: the kernel packages whose sources the key covers
+SOURCE_PACKAGES = ("kernels", "physics", "solvers", "engine")
+_PACKAGE = Path(__file__).resolve().parent.parent
+
+
+@dataclass(frozen=True)
+class UserFunctions:
+    """A user system's functions, as the composition binds them.
+
+    ``module`` and the names locate them for an import by name (``module`` is
+    None when they cannot be imported); ``digest`` is the sha256 of the
+    module's file, part of the key.
+    """
+
+    rhs: object
+    jacobian: object
+    gap: object | None
+    n: int
+    n_params: int
+    module: str | None
+    names: tuple[str, str, str | None]
+    digest: str
+
+    @classmethod
+    def of(cls, rhs, jacobian, gap, n: int, n_params: int) -> UserFunctions:
+        names = (_name(rhs), _name(jacobian), _name(gap) if gap is not None else None)
+        module = _importable_module(rhs, jacobian, gap)
+        digest = ""
+        if module is not None:
+            digest = hashlib.sha256(Path(sys.modules[module].__file__).read_bytes()).hexdigest()
+        return cls(rhs, jacobian, gap, n, n_params, module, names, digest)
+
+    def canonical(self) -> str:
+        where = self.module if self.module is not None else f"memory:{id(self.rhs):x}"
+        return f"{where}:{self.names}:{self.digest}:n={self.n}:q={self.n_params}"
+
+
+@dataclass(frozen=True)
+class Composition:
+    """What an engine integrates, each piece named once.
+
+    Attributes
+    ----------
+    model : str
+        A key of :data:`MODELS`.
+    law : str
+        A key of :data:`LAWS` (ignored by models without contact).
+    ground : str
+        A key of :data:`GROUNDS`.
+    method : str
+        A key of :data:`chaospound.solvers.tableaux.METHODS`.
+    tangent : bool
+        Tangent vectors follow the state (Lyapunov exponents): the
+        variational equations and QR at every section.
+    user : UserFunctions or None
+        A user system's functions (model "user").
+    """
+
+    model: str
+    law: str = "hertz"
+    ground: str = "sine"
+    method: str = "dopri5"
+    tangent: bool = False
+    user: UserFunctions | None = None
+
+    def __post_init__(self) -> None:
+        for label, value, known in (("model", self.model, MODELS), ("law", self.law, LAWS),
+                                    ("ground", self.ground, GROUNDS),
+                                    ("method", self.method, METHODS)):
+            if value not in known:
+                raise ValueError(f"{label} = {value!r}: need one of {', '.join(known)}")
+        if (self.model == "user") != (self.user is not None):
+            raise ValueError("a user model needs its functions, and only a user model has them")
+
+    def canonical(self) -> str:
+        """The composition as text (part of the key)."""
+        text = (f"model={self.model};law={self.law};ground={self.ground};"
+                f"method={self.method};tangent={int(self.tangent)}")
+        if self.user is not None:
+            text += f";user={self.user.canonical()}"
+        return text
+
+    def with_tangent(self, tangent: bool = True) -> Composition:
+        return Composition(self.model, self.law, self.ground, self.method, tangent, self.user)
+
+    def label(self) -> str:
+        """Short human label: ``towers/hertz/sine/dopri5``."""
+        parts = [self.model, self.law, self.ground, self.method]
+        if self.tangent:
+            parts.append("tangent")
+        return "/".join(parts)
+
+
+# ---------------------------------------------------------------- generation
+
+
+def _template_text(module: str) -> tuple[str, str]:
+    """``(prefix, body)`` of a template module: its set-up (imports, constants;
+    without its docstring, the :mod:`.free` import and the decorators' import,
+    which the generated module binds) and its template text."""
+    path = _module_path(module)
+    source = path.read_text()
+    if MARKER not in source:
+        raise RuntimeError(f"{path} is not a template: no {MARKER.strip()!r} line")
+    prefix, body = source.split(MARKER, 1)
+    tree = ast.parse(prefix)
+    lines = prefix.splitlines(keepends=True)
+    drop: set[int] = set()
+    for node in tree.body:
+        is_doc = (isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant)
+                  and isinstance(node.value.value, str))
+        is_bound = isinstance(node, ast.ImportFrom) and node.module in (
+            "chaospound.engine.free", "chaospound.kernels.jit")
+        if is_doc or is_bound:
+            drop.update(range(node.lineno - 1, node.end_lineno))
+    kept = "".join(line for i, line in enumerate(lines) if i not in drop)
+    return kept.strip() + "\n", body.strip() + "\n"
+
+
+def _module_path(module: str) -> Path:
+    parts = module.split(".")
+    if parts[0] != "chaospound":
+        raise ValueError(f"{module}: templates live in the chaospound package")
+    return _PACKAGE.joinpath(*parts[1:]).with_suffix(".py")
+
+
+def _bindings(c: Composition) -> str:
+    """The header that binds every free name of the templates for ``c``."""
+    method = METHODS[c.method]
+    law = LAWS[c.law]
+    ground = GROUNDS[c.ground]
+    lines = [
+        "# ---- the composition's bindings",
+        "from chaospound.solvers.controllers import " + f"{method.controller} as controller",
+    ]
+    if method.error:
+        lines.append(f"from chaospound.solvers.errors import {method.error} as step_error")
+    if method.tableau:
+        t = method.tableau
+        lines.append(f"from chaospound.solvers.tableaux import {t}_A as TAB_A, {t}_B as TAB_B, "
+                     f"{t}_C as TAB_C")
+    lines.append(f"from {law} import " + ", ".join(f"{f} as law_{f}" for f in LAW_FUNCTIONS))
+    lines.append(f"from {ground} import "
+                 + ", ".join(f"{f} as ground_{f}" for f in GROUND_FUNCTIONS))
+    lines += [
+        f"LAW = {P_BETA}",
+        f"GROUND = {P_PERIOD_RATIO}",
+        f"TANGENT = {c.tangent}",
+        f"ADAPTIVE = {method.adaptive}",
+        f"NEW_EVALS = {method.new_evals}",
+        f"DENSE_EVALS = {method.dense_evals}",
+        f"DENSE_ROWS = {method.dense_rows}",
+        f"ERROR_ORDER = {method.error_order}",
+    ]
+    if c.user is not None:
+        u = c.user
+        lines += [
+            f"N_BASE = {u.n}",
+            f"N_ENDS = {1 if u.gap is not None else 0}",
+            f"USER_HAS_GAP = {u.gap is not None}",
+            f"USER_BASE = {N_PARAMS}",
+            f"USER_END = {N_PARAMS + u.n_params}",
+            f"USER_JAC = {N_PARAMS + u.n_params}",
+        ]
+        if u.module is not None:
+            rhs, jac, gap = u.names
+            names = [f"{rhs} as user_rhs", f"{jac} as user_jacobian"]
+            if gap is not None:
+                names.append(f"{gap} as user_gap")
+            lines.append(f"from {u.module} import " + ", ".join(names))
+        if u.gap is None:
+            lines.append("from chaospound.physics.models.user_support import no_gap as user_gap")
+    return "\n".join(lines) + "\n"
+
+
+def _footer(c: Composition) -> str:
+    method = METHODS[c.method]
+    return "\n".join([
+        "# ---- the method's and the tangent's choices",
+        f"step = {method.stepper}",
+        f"dense_prepare = {method.dense}",
+        f"rhs_grounded = {'rhs_tangent' if c.tangent else 'rhs_plain'}",
+    ]) + "\n"
+
+
+def generate_source(c: Composition, cached: bool = True) -> str:
+    """The text of the engine module of ``c`` (``cached``: its kernels on numba's disk cache)."""
+    modules = (MODELS[c.model],) + TEMPLATES
+    parts = [_template_text(m) for m in modules]
+    decorators = ("from chaospound.kernels.jit import inline, kernel" if cached else
+                  "from chaospound.kernels.jit import inline_uncached as inline, "
+                  "kernel_uncached as kernel")
+    out = [f'"""Generated by chaospound.engine.compose for {c.canonical()}. Do not edit."""\n',
+           decorators + "\n"]
+    out += [prefix for prefix, _ in parts]
+    out.append(_bindings(c))
+    out += [body for _, body in parts]
+    out.append(_footer(c))
+    return "\n\n".join(out)
+
+
+# ------------------------------------------------------------ keys and files
+
+_DIGEST: list[str] = []
+
+
+def source_digest() -> str:
+    """sha256 of every module of the kernel packages (names and bytes), memoised."""
+    if not _DIGEST:
+        digest = hashlib.sha256()
+        for package in SOURCE_PACKAGES:
+            for path in sorted((_PACKAGE / package).rglob("*.py")):
+                data = path.read_bytes()
+                digest.update(f"{path.relative_to(_PACKAGE)} {len(data)}\n".encode())
+                digest.update(data)
+        _DIGEST.append(digest.hexdigest())
+    return _DIGEST[0]
+
+
+def composition_key(c: Composition) -> str:
+    import numba
+
+    text = "\0".join([TEMPLATE_VERSION, numba.__version__, sys.version, source_digest(),
+                      c.canonical()])
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def cache_root() -> Path:
+    """Where generated engines live: ``$CHAOSPOUND_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/chaospound``, else ``~/.cache/chaospound``."""
+    explicit = os.environ.get("CHAOSPOUND_CACHE_DIR")
+    if explicit:
+        return Path(explicit)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "chaospound"
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}.tmp")
+    with open(temporary, "w") as fh:
+        fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(temporary, path)
+
+
+# ------------------------------------------------------------------- engines
+
+
+class Engine:
+    """The compiled engine of one composition (a thin Python face of its module).
+
+    ``module`` holds the kernels (``run``, ``rhs``, ``step``, ``model_*``, ...);
+    :meth:`run_cycles` allocates the workspaces and runs the loop.
+    """
+
+    def __init__(self, composition: Composition, module: types.ModuleType, cached_file: bool):
+        self.composition = composition
+        self.module = module
+        self.cached_file = cached_file
+
+    def __repr__(self) -> str:
+        return f"Engine({self.composition.label()})"
+
+    def run_cycles(self, p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart,
+                   n_samples, strobe, traj, imp, imp_state, stats, tangent_log) -> int:
+        """The loop (:func:`chaospound.engine.loop.run`) with fresh workspaces."""
+        n = y.shape[0]
+        vectors = np.empty((MAX_STAGES + MAX_DENSE + 5, n))
+        scalars = np.empty(N_SCALARS)
+        ev_end = np.empty(MAX_EVENTS, dtype=np.int64)
+        return self.module.run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps,
+                               restart, n_samples, strobe, traj, imp, imp_state, stats,
+                               tangent_log, vectors, scalars, ev_end)
+
+    def is_cached(self) -> bool | None:
+        """Whether the loop's machine code is in numba's disk cache (None: unknown)."""
+        if not self.cached_file:
+            return False
+        from ..kernels.jit import is_cached
+
+        return is_cached(self.module.run)
+
+
+_ENGINES: dict[Composition, Engine] = {}
+_LOCK = threading.Lock()
+
+
+def engine_for(c: Composition) -> Engine:
+    """The engine of a composition, generated and loaded once per process."""
+    engine = _ENGINES.get(c)
+    if engine is None:
+        with _LOCK:
+            engine = _ENGINES.get(c)
+            if engine is None:
+                engine = _load(c)
+                _ENGINES[c] = engine
+    return engine
+
+
+def _load(c: Composition) -> Engine:
+    if c.user is not None and c.user.module is None:
+        return Engine(c, _load_in_memory(c), cached_file=False)
+    source = generate_source(c)
+    key = composition_key(c)
+    folder = cache_root() / "composed"
+    name = f"engine_{key}"
+    path = folder / f"{name}.py"
+    try:
+        if not path.exists() or path.read_text() != source:
+            _write_atomically(path, source)
+    except OSError:  # a read-only cache: build in memory, compiled per process
+        return Engine(c, _load_in_memory(c), cached_file=False)
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
+    importlib.invalidate_caches()
+    return Engine(c, importlib.import_module(name), cached_file=True)
+
+
+def _load_in_memory(c: Composition) -> types.ModuleType:
+    """The module built from text, uncached: user functions bound as objects."""
+    source = generate_source(c, cached=False)
+    module = types.ModuleType(f"chaospound_engine_{uuid.uuid4().hex[:12]}")
+    if c.user is not None:
+        module.user_rhs = c.user.rhs
+        module.user_jacobian = c.user.jacobian
+        if c.user.gap is not None:
+            module.user_gap = c.user.gap
+    exec(compile(source, f"<chaospound engine {c.label()}>", "exec"), module.__dict__)
+    return module
+
+
+def _name(fn) -> str:
+    return getattr(fn, "py_func", fn).__name__
+
+
+def _importable_module(*functions) -> str | None:
+    """The module all the given jitted functions can be imported from by name, or None."""
+    modules = set()
+    for fn in functions:
+        if fn is None:
+            continue
+        py = getattr(fn, "py_func", None)
+        if py is None or py.__closure__ is not None or "<locals>" in py.__qualname__:
+            return None
+        module = sys.modules.get(py.__module__)
+        if (module is None or py.__module__ == "__main__"
+                or not getattr(module, "__file__", None)
+                or getattr(module, py.__name__, None) is not fn):
+            return None
+        modules.add(py.__module__)
+    return modules.pop() if len(modules) == 1 else None

@@ -1,0 +1,45 @@
+"""The names a composition binds, as placeholders for the templates' linting.
+
+Template modules (the model, glue, stepper, event and loop templates) are
+ordinary Python text whose functions call names they do not define: the
+contact law's ``law_*``, the ground motion's ``ground_*``, the model's
+``model_*``, the method's ``step`` and its constants. They import those names
+from here so that linters and readers can resolve them;
+:mod:`chaospound.engine.compose` drops that import and binds the real ones in
+the generated module of each composition. Calling a placeholder is a bug.
+"""
+
+
+def _unbound(*args):
+    raise RuntimeError("a template function was called outside a composition")
+
+
+# ---- composition constants (block offsets, sizes, switches fixed at generation)
+LAW = 0  #: first slot of the contact law's block
+GROUND = 0  #: first slot of the ground motion's block
+N_BASE = 0  #: state dimension of the model (the tangent vectors follow it)
+N_ENDS = 0  #: contact ends the events watch: 2 (line contact), 1 (point), 0 (none)
+TANGENT = False  #: integrate tangent vectors after the state (QR at sections)
+ADAPTIVE = True  #: the method has an error estimate and a controller
+NEW_EVALS = 0  #: rhs evaluations per step, f_new included
+DENSE_EVALS = 0  #: extra rhs evaluations to prepare the dense output
+DENSE_ROWS = 0  #: rows of the dense-output coefficients
+ERROR_ORDER = 0  #: order of the error estimator (initial step)
+TAB_A = TAB_B = TAB_C = None  #: the tableau of a generic explicit method
+USER_BASE = USER_END = USER_JAC = 0  #: a user system's parameters and Jacobian scratch
+
+# ---- contact law
+law_point_force = law_point_stiffness = law_point_force_rate = law_point_potential = _unbound
+law_line_force = law_line_gradient = law_line_force_rate = law_line_potential = _unbound
+# ---- ground motion
+ground_at = ground_anchor = ground_shifted = ground_at_anchor = _unbound
+# ---- model
+model_rhs = model_ends = model_rate = model_forces = model_force_rate = _unbound
+model_potential = model_energy = model_trace = model_linearize = model_jvp = _unbound
+model_contact_point = _unbound
+# ---- user system
+user_rhs = user_jacobian = user_gap = _unbound
+# ---- method
+step = dense_prepare = controller = step_error = _unbound
+# ---- defined by the engine templates, used by others
+rhs = rhs_grounded = end_value = locate_root = locate_extremum = _unbound

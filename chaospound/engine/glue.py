@@ -1,0 +1,51 @@
+"""The right-hand side of a composition: model, contact law and ground motion joined.
+
+A template (:mod:`.compose`). ``rhs(t, y, p, out)`` evaluates the ground motion
+and calls ``rhs_grounded``, which the composition binds to
+:func:`rhs_plain` (the state alone) or :func:`rhs_tangent` (the state
+followed by tangent vectors: the variational equations ``V' = J V`` of
+docs/model.md section 12, with the model's linearisation computed once per
+call and applied to each vector).
+"""
+
+from chaospound.engine.free import (
+    GROUND,
+    N_BASE,
+    ground_at,
+    model_jvp,
+    model_linearize,
+    model_rhs,
+    rhs_grounded,
+)
+from chaospound.kernels.jit import kernel
+
+# ==== template ====
+
+
+@kernel
+def rhs(t, y, p, out):
+    """Time derivative of the state (and tangent vectors), into ``out``."""
+    ug, vg = ground_at(t, p, GROUND)
+    rhs_grounded(t, y, p, ug, vg, out)
+
+
+@kernel
+def rhs_plain(t, y, p, ug, vg, out):
+    """:func:`rhs` with the ground motion ``(u_g, u_g')`` at t given.
+
+    Lets a stepper that evaluates twice at one time (Dormand-Prince's last
+    stage and its FSAL stage) compute the ground once. One out-of-line copy
+    with the model body inlined, not inlined itself into each of the seven
+    Dormand-Prince stages, which would double the compile time.
+    """
+    model_rhs(t, y, p, ug, vg, out)
+
+
+@kernel
+def rhs_tangent(t, y, p, ug, vg, out):
+    """State and tangent vectors: ``y' = f(y)``, ``V' = J(y) V``."""
+    model_rhs(t, y, p, ug, vg, out)
+    n = N_BASE
+    lin = model_linearize(t, y, p)
+    for i in range(1, y.shape[0] // n):
+        model_jvp(p, lin, y[i * n:(i + 1) * n], out[i * n:(i + 1) * n])

@@ -1,0 +1,122 @@
+"""Chau & Wei (2001): the two towers' translations X_A, X_B only (4 states).
+
+docs/model.md section 9: the exact reduction of the towers model when both
+towers are symmetric and the motion stays translational. State ``(X_A, X_A',
+X_B, X_B')``, a point contact ``d = X_A - X_B - a``. A template, as
+:mod:`chaospound.physics.models.towers`.
+"""
+
+from chaospound.engine.free import (
+    LAW,
+    law_point_force,
+    law_point_force_rate,
+    law_point_potential,
+    law_point_stiffness,
+)
+from chaospound.kernels.jit import inline, kernel
+from chaospound.kernels.params import P_GAP, T_CX, T_MU, T_OM2, TOWER_A, TOWER_B
+from chaospound.physics.corners import CORNER_FACE
+from chaospound.physics.towers import tower_energy
+
+# ==== template ====
+N_BASE = 4
+N_ENDS = 1
+
+
+@inline
+def model_rhs(t, y, p, ug, vg, out):
+    """Time derivative of the state, into ``out``."""
+    d = y[0] - y[2] - p[P_GAP]
+    force = law_point_force(p, LAW, d, y[1] - y[3])
+    a = TOWER_A
+    b = TOWER_B
+    out[0] = y[1]
+    out[1] = -p[a + T_CX] * (y[1] - vg) - p[a + T_OM2] * (y[0] - ug) - p[a + T_MU] * force
+    out[2] = y[3]
+    out[3] = -p[b + T_CX] * (y[3] - vg) - p[b + T_OM2] * (y[2] - ug) + p[b + T_MU] * force
+
+
+@inline
+def model_rate(t, y, p, y_at):
+    """Closing velocity ``X_A' - X_B'``."""
+    return y[1] - y[3]
+
+
+@inline
+def model_ends(t, y, p, out):
+    """Both ends carry the single penetration d and its rate."""
+    d = y[0] - y[2] - p[P_GAP]
+    rate = y[1] - y[3]
+    out[0] = d
+    out[1] = d
+    out[2] = rate
+    out[3] = rate
+
+
+@kernel
+def model_forces(t, y, p, q_out):
+    """Generalised contact forces (X_A, 0, 0, X_B, 0, 0); returns the force on A."""
+    for i in range(6):
+        q_out[i] = 0.0
+    d = y[0] - y[2] - p[P_GAP]
+    force = law_point_force(p, LAW, d, y[1] - y[3])
+    q_out[0] = -force
+    q_out[3] = force
+    return -q_out[0]
+
+
+@kernel
+def model_force_rate(t, y, p, ends):
+    """Time derivative of the contact force; ``ends`` from :func:`model_ends`."""
+    if ends[0] <= 0.0 and ends[1] <= 0.0:
+        return 0.0
+    return law_point_force_rate(p, LAW, ends[0], ends[2])
+
+
+@kernel
+def model_potential(t, y, p):
+    """Contact potential V_c, units of A_g^2 k_Ax."""
+    return law_point_potential(p, LAW, y[0] - y[2] - p[P_GAP])
+
+
+@kernel
+def model_energy(y, p):
+    """Structural, kinetic and contact energy (docs/model.md section 7)."""
+    e = tower_energy(p, TOWER_A, y[0], y[1], 0.0, 0.0, 0.0, 0.0)
+    e += tower_energy(p, TOWER_B, y[2], y[3], 0.0, 0.0, 0.0, 0.0)
+    return e + model_potential(0.0, y, p)
+
+
+@kernel
+def model_trace(p):
+    """Constant trace of the Jacobian."""
+    tr = -p[TOWER_A + T_CX]
+    tr -= p[TOWER_B + T_CX]
+    return tr
+
+
+@kernel
+def model_linearize(t, y, p):
+    """The contact stiffness dF/dd (and 8 unused zeros)."""
+    d = y[0] - y[2] - p[P_GAP]
+    stiffness, _ = law_point_stiffness(p, LAW, d, y[1] - y[3])
+    return stiffness, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+
+
+@kernel
+def model_jvp(p, lin, v, out):
+    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`."""
+    stiffness = lin[0]
+    a = TOWER_A
+    b = TOWER_B
+    squeeze = stiffness * (v[0] - v[2])
+    out[0] = v[1]
+    out[1] = -p[a + T_OM2] * v[0] - p[a + T_CX] * v[1] - p[a + T_MU] * squeeze
+    out[2] = v[3]
+    out[3] = -p[b + T_OM2] * v[2] - p[b + T_CX] * v[3] + p[b + T_MU] * squeeze
+
+
+@kernel
+def model_contact_point(t, state, p, ends):
+    """``(face, 0, closing velocity)``: a point contact has no corners."""
+    return CORNER_FACE, 0.0, ends[2]

@@ -1,0 +1,115 @@
+"""Davis (1992): tower A's translation X_A against a rigid ground-borne wall (2 states).
+
+docs/model.md section 9. State ``(X_A, X_A')``, a point contact ``d = X_A - u_g - a``.
+A template, as :mod:`chaospound.physics.models.towers`.
+"""
+
+from chaospound.engine.free import (
+    GROUND,
+    LAW,
+    ground_at,
+    law_point_force,
+    law_point_force_rate,
+    law_point_potential,
+    law_point_stiffness,
+)
+from chaospound.kernels.jit import inline, kernel
+from chaospound.kernels.params import P_GAP, T_CX, T_MU, T_OM2, TOWER_A
+from chaospound.physics.corners import CORNER_FACE
+from chaospound.physics.towers import tower_energy
+
+# ==== template ====
+N_BASE = 2
+N_ENDS = 1
+
+
+@inline
+def model_rhs(t, y, p, ug, vg, out):
+    """Time derivative of the state, into ``out``."""
+    d = y[0] - ug - p[P_GAP]
+    force = law_point_force(p, LAW, d, y[1] - vg)
+    a = TOWER_A
+    out[0] = y[1]
+    out[1] = -p[a + T_CX] * (y[1] - vg) - p[a + T_OM2] * (y[0] - ug) - p[a + T_MU] * force
+
+
+@inline
+def model_rate(t, y, p, y_at):
+    """Closing velocity against the moving wall, ``X_A' - u_g'``."""
+    _, vg = ground_at(t, p, GROUND)
+    return y[1] - vg
+
+
+@inline
+def model_ends(t, y, p, out):
+    """Both ends carry the single penetration d and its rate."""
+    ug, vg = ground_at(t, p, GROUND)
+    d = y[0] - ug - p[P_GAP]
+    rate = y[1] - vg
+    out[0] = d
+    out[1] = d
+    out[2] = rate
+    out[3] = rate
+
+
+@kernel
+def model_forces(t, y, p, q_out):
+    """Generalised contact force (X_A, 0, ...); returns the force on A."""
+    ug, vg = ground_at(t, p, GROUND)
+    for i in range(6):
+        q_out[i] = 0.0
+    d = y[0] - ug - p[P_GAP]
+    force = law_point_force(p, LAW, d, y[1] - vg)
+    q_out[0] = -force
+    return -q_out[0]
+
+
+@kernel
+def model_force_rate(t, y, p, ends):
+    """Time derivative of the contact force; ``ends`` from :func:`model_ends`."""
+    if ends[0] <= 0.0 and ends[1] <= 0.0:
+        return 0.0
+    return law_point_force_rate(p, LAW, ends[0], ends[2])
+
+
+@kernel
+def model_potential(t, y, p):
+    """Contact potential V_c, units of A_g^2 k_Ax."""
+    ug, _ = ground_at(t, p, GROUND)
+    return law_point_potential(p, LAW, y[0] - ug - p[P_GAP])
+
+
+@kernel
+def model_energy(y, p):
+    """Structural, kinetic and contact energy (docs/model.md section 7)."""
+    e = tower_energy(p, TOWER_A, y[0], y[1], 0.0, 0.0, 0.0, 0.0)
+    return e + model_potential(0.0, y, p)
+
+
+@kernel
+def model_trace(p):
+    """Constant trace of the Jacobian."""
+    return -p[TOWER_A + T_CX]
+
+
+@kernel
+def model_linearize(t, y, p):
+    """The contact stiffness dF/dd (and 8 unused zeros)."""
+    ug, vg = ground_at(t, p, GROUND)
+    d = y[0] - ug - p[P_GAP]
+    stiffness, _ = law_point_stiffness(p, LAW, d, y[1] - vg)
+    return stiffness, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+
+
+@kernel
+def model_jvp(p, lin, v, out):
+    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`."""
+    a = TOWER_A
+    out[0] = v[1]
+    out[1] = -(p[a + T_OM2] + p[a + T_MU] * lin[0]) * v[0] - p[a + T_CX] * v[1]
+
+
+@kernel
+def model_contact_point(t, state, p, ends):
+    """``(face, 0, closing velocity)``: a point contact has no corners."""
+    return CORNER_FACE, 0.0, ends[2]
