@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from chaospound.kernels import models
+from chaospound.dynamics.system import System
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate
 
@@ -47,9 +47,10 @@ def energy_drift() -> dict:
     scene = load_preset("fig3a").with_params(zeta=0, ground="none", rtol=1e-10, atol=1e-12,
                                              initial_state=initial)
     sim = simulate(scene, transient=0, record=200, samples_per_cycle=40)
-    mid, p = scene.model_id(), scene.pack()
-    e0 = models.energy(mid, scene.initial_vector(), p)
-    energies = [models.energy(mid, y, p) for y in sim.trajectory.state]
+    system = System.from_scene(scene)
+    energy, p = system.engine().module.model_energy, system.params
+    e0 = energy(system.initial_state, p)
+    energies = [energy(y, p) for y in sim.trajectory.state]
     return {"model": sim.model, "impacts": len(sim.impacts),
             "relative_drift": float(np.max(np.abs(np.array(energies) - e0)) / e0)}
 

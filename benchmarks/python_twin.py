@@ -1,11 +1,11 @@
 """The pounding equations in plain Python: the baseline of the speed benchmark.
 
 An independent transcription of docs/model.md sections 5-6, with the
-closed-form line-contact moments of :mod:`chaospound.kernels.contact`, written
+closed-form line-contact moments of :mod:`chaospound.physics.contact.moments`, written
 with ``math`` on Python floats, as a scipy user would write it.
 ``chaospound bench`` (:mod:`chaospound.bench`) integrates it with
 ``solve_ivp(RK45)`` as the "Python rhs" run; tests/test_bench.py checks it
-against :func:`chaospound.kernels.models.rhs` to 1e-12.
+against the composed engine's ``rhs`` to 1e-12.
 
 It lives here, outside the package: it is a second copy of the physics, kept
 only to measure against. :func:`chaospound.bench.load_python_twin` finds it in
@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from chaospound.kernels.contact import EPS_SERIES, SERIES_MAX_TERMS, SERIES_RTOL
+from chaospound.physics.contact.moments import EPS_SERIES, SERIES_MAX_TERMS, SERIES_RTOL
 from chaospound.kernels.params import (
     MODEL_NAMES,
     P_BETA,
@@ -55,10 +55,10 @@ def python_rhs(model: int, t: float, y: Sequence[float], p: Sequence[float]) -> 
     """Right-hand side of the pounding equations in plain Python (no numba).
 
     An independent transcription of docs/model.md sections 5-6 with the closed-form
-    line-contact moments of :mod:`chaospound.kernels.contact`, written with
+    line-contact moments of :mod:`chaospound.physics.contact.moments`, written with
     ``math`` on Python floats, as a scipy user would write it. The benchmark's
     scipy baseline uses it; the tests check it against
-    :func:`chaospound.kernels.models.rhs`.
+    the composed engine's ``rhs``.
 
     Parameters
     ----------
@@ -191,7 +191,7 @@ def _py_line_contact(d_c, slope, half_length, beta, chi):
 def _py_moments(j, d_lo, d_hi):
     """``int_0^1 d+^j ds`` and ``int_0^1 d+^j (s - 1/2) ds`` for d linear in s.
 
-    The three regimes of :func:`chaospound.kernels.contact.moments`: one end
+    The three regimes of :func:`chaospound.physics.contact.moments.moments`: one end
     penetrating, nearly parallel (binomial series), clearly skewed.
     """
     if d_lo <= 0.0 or d_hi <= 0.0:  # one end only: the penetrated sub-interval

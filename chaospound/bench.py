@@ -11,7 +11,7 @@
   (:func:`load_python_twin`); without it (an installed package) this run is
   left out and reported missing;
 * ``scipy-numba``: ``solve_ivp(method="RK45")`` with the jitted kernel
-  :func:`chaospound.kernels.models.rhs` wrapped in a Python function;
+  :func:`rhs` of the composed engine wrapped in a Python function;
 * ``cli``: ``chaospound simulate`` end to end in a subprocess (warm numba
   cache), best of ``cli_repeats``.
 
@@ -269,13 +269,19 @@ def load_python_twin() -> ModuleType | None:
 
 
 def numba_fun(model: int, p: np.ndarray) -> Callable[[float, np.ndarray], np.ndarray]:
-    """``fun(t, y)`` for ``solve_ivp`` calling the jitted kernel ``models.rhs``."""
-    from .kernels.models import rhs
+    """``fun(t, y)`` for ``solve_ivp`` calling the composed engine's jitted ``rhs``.
 
+    The ground motion is the packed vector's (``P_GROUND``: 1 sine, 0 none).
+    """
+    from .engine.compose import Composition, engine_for
+    from .kernels.params import P_GROUND
+
+    ground = "sine" if p[P_GROUND] == 1.0 else "none"
+    rhs = engine_for(Composition(MODEL_NAMES[model], ground=ground)).module.rhs
     out = np.empty(MODEL_DIMS[model])
 
     def fun(t, y):
-        rhs(model, t, y, p, out)
+        rhs(t, y, p, out)
         return out.copy()
 
     return fun

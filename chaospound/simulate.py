@@ -2,7 +2,7 @@
 
 The driver packs a :class:`~chaospound.scene.Scene`, picks the smallest exact
 model (docs/model.md section 9), runs the jitted cycle integrator
-(:func:`chaospound.kernels.integrate.run_cycles`) and returns plain arrays in
+(the composed engine of :mod:`chaospound.engine.compose`) and returns plain arrays in
 dataclasses. Nothing here knows about files, plots or the command line.
 """
 

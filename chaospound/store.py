@@ -485,7 +485,7 @@ class SweepFile:
                               {"long_name": "grid indices (row-major) in visiting order"})
         for field, values in data["impacts"].items():
             if field == "corner":
-                from .kernels.integrate import CORNER_LABELS
+                from .physics.corners import CORNER_LABELS
 
                 values = np.array([CORNER_LABELS[int(c)] for c in values], dtype="U4")
             variables[f"impact_{field}"] = (("impact",), values, _var_attrs(field))
@@ -540,7 +540,7 @@ class SweepFile:
         start = int(data["impact_start"][index])
         count = int(data["impact_count"][index])
         out = {name: data["impacts"][name][start:start + count] for name in IMPACT_FIELDS}
-        from .kernels.integrate import CORNER_LABELS
+        from .physics.corners import CORNER_LABELS
 
         out["corner"] = np.array([CORNER_LABELS[int(c)] for c in out["corner"]])
         return out

@@ -13,8 +13,8 @@ import pytest
 
 from chaospound.bench import RUNS, load_python_twin, numba_fun
 from chaospound.cli import main
-from chaospound.kernels.contact import EPS_SERIES
-from chaospound.kernels.models import contact_ends, rhs
+from kernels_by_name import EPS_SERIES
+from kernels_by_name import contact_ends, rhs
 from chaospound.kernels.params import MODEL_DIMS, PAIR, TOWER_WALL, TOWERS, WALL
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate

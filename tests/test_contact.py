@@ -5,13 +5,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from chaospound.kernels.contact import (
+from kernels_by_name import (
     EPS_SERIES,
     line_contact,
     line_potential,
     moments,
 )
-from chaospound.kernels.models import contact_forces, contact_potential
+from kernels_by_name import contact_forces, contact_potential
 from chaospound.kernels.params import TOWERS
 from chaospound.scene import load_preset
 
@@ -125,7 +125,7 @@ def test_forces_are_minus_gradient_of_potential(pen, th_a, tilt, y_a, y_b, x_b):
     # place X_A so that the centre penetration is `pen`
     probe = y.copy()
     ends = np.zeros(4)
-    from chaospound.kernels.models import contact_ends
+    from kernels_by_name import contact_ends
 
     contact_ends(TOWERS, 0.3, probe, _P, ends)
     y[0] = pen - 0.5 * (ends[0] + ends[1])

@@ -15,7 +15,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from chaospound.kernels import events, rk
+from kernels_by_name import events, rk
 from chaospound.kernels.params import N_PARAMS, P_GAP, P_GROUND, P_PERIOD_RATIO, PAIR
 
 GAP = 0.5

@@ -46,8 +46,8 @@ import numpy as np
 import pytest
 
 from chaospound.cli import main
-from chaospound.kernels import models
-from chaospound.kernels.events import TIME_TOL
+from kernels_by_name import models
+from chaospound.engine.events import TIME_TOL
 from chaospound.scene import SceneError, load_preset
 from chaospound.simulate import Simulation, SimulationError, simulate
 

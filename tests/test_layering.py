@@ -4,8 +4,15 @@ Imports are read from the source with :mod:`ast`, at module level and inside
 functions alike (a function-level import is still an edge: it only moves the
 cycle to run time). The layers, from the bottom:
 
-* ``chaospound.kernels``: the numba kernels; they import nothing of
-  chaospound outside the kernels package.
+* ``chaospound.kernels``: the numba decorators, the packed-vector layout, the
+  cache guard and the composition's free names; nothing of chaospound outside it;
+* ``chaospound.physics`` (models, contact laws, ground motions) and
+  ``chaospound.solvers`` (tableaux, steppers, controllers): each imports only
+  itself and the kernels package, never the other: physics and solvers never
+  meet except in the engine;
+* ``chaospound.engine``: composes them (it imports solvers and the kernels
+  package, and of physics only the corner codes; models, laws and motions are
+  named as data and joined in the generated module);
 * the edge below the drivers: ``scene``, ``messages`` and the shared system
   vocabulary ``dynamics.system``;
 * the drivers and analyses: ``simulate``, ``dynamics.*``;
@@ -26,6 +33,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / "chaospound"
 #: modules at or below the drivers: none of them may import plot, store or cli
 BELOW_SWEEP = (
     "chaospound.kernels",
+    "chaospound.physics",
+    "chaospound.solvers",
+    "chaospound.engine",
     "chaospound.scene",
     "chaospound.messages",
     "chaospound.simulate",
@@ -117,7 +127,7 @@ def _under(name: str, prefixes) -> bool:
 
 def test_the_graph_sees_function_level_and_relative_imports():
     graph = import_graph()
-    assert "chaospound.kernels.integrate" in graph["chaospound.simulate"]  # relative
+    assert "chaospound.engine.compose" in graph["chaospound.simulate"]  # relative
     assert "chaospound.distributed" in graph["chaospound.sweep"]  # inside a function
     assert "chaospound.scene" in graph["chaospound"]  # inside __getattr__
 
@@ -132,6 +142,26 @@ def test_kernels_import_only_kernels():
              if _under(name, ["chaospound.kernels"])
              for target in edges if not _under(target, ["chaospound.kernels"])}
     assert wrong == set()
+
+
+def _imports_outside(graph, package: str, allowed) -> set:
+    return {(name, target) for name, edges in graph.items() if _under(name, [package])
+            for target in edges if not _under(target, allowed)}
+
+
+def test_physics_and_solvers_never_import_each_other():
+    graph = import_graph()
+    assert _imports_outside(graph, "chaospound.physics",
+                            ["chaospound.physics", "chaospound.kernels"]) == set()
+    assert _imports_outside(graph, "chaospound.solvers",
+                            ["chaospound.solvers", "chaospound.kernels"]) == set()
+
+
+def test_the_engine_joins_physics_and_solvers_only_by_name():
+    graph = import_graph()
+    allowed = ["chaospound.engine", "chaospound.solvers", "chaospound.kernels",
+               "chaospound.physics.corners"]
+    assert _imports_outside(graph, "chaospound.engine", allowed) == set()
 
 
 def test_nothing_below_the_sweep_imports_plot_store_or_cli():

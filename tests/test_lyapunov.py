@@ -9,7 +9,7 @@ from chaospound.dynamics.lyapunov import (
     lyapunov_spectrum,
 )
 from chaospound.dynamics.system import System, duffing, lorenz
-from chaospound.kernels.models import jacobian
+from kernels_by_name import jacobian
 from chaospound.scene import load_preset
 
 CHAOTIC_FIG4 = load_preset("fig4").with_params(period_ratio=0.9, rtol=1e-8)

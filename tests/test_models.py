@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from chaospound.kernels.models import (
+from kernels_by_name import (
     contact_ends,
     contact_forces,
     contact_potential,

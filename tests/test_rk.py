@@ -20,8 +20,8 @@ import pytest
 from scipy.integrate import DOP853 as ScipyDOP853
 from scipy.integrate import RK45 as ScipyRK45
 
-from chaospound.kernels import rk
-from chaospound.kernels.models import rhs
+from kernels_by_name import rk
+from kernels_by_name import rhs
 from chaospound.kernels.params import (
     N_PARAMS,
     P_BETA,

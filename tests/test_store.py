@@ -344,7 +344,7 @@ def test_to_xarray_round_trips_every_dataset(both_file):
                 if name.startswith("impacts/"):
                     var = ds[f"impact_{name.split('/')[1]}"].values
                     if name.endswith("corner"):
-                        from chaospound.kernels.integrate import CORNER_LABELS
+                        from chaospound.physics.corners import CORNER_LABELS
                         stored = np.array([CORNER_LABELS[int(c)] for c in stored])
                         assert list(var) == list(stored)
                         continue

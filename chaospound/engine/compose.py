@@ -10,7 +10,7 @@ they had been written there:
 * the **text** is the template modules (:data:`TEMPLATES`: the model, the glue,
   the steppers, the events and the loop), each cut at its ``# ==== template
   ====`` line, joined with bindings of the names they leave free
-  (:mod:`.free`): ``law_*`` imported from the law's module, ``ground_*`` from
+  (:mod:`chaospound.kernels.free`): ``law_*`` imported from the law's module, ``ground_*`` from
   the ground motion's, the method's stepper, dense output, error and
   controller, and the composition's constants (state size, contact ends,
   block offsets);
@@ -80,8 +80,6 @@ TEMPLATES = ("chaospound.engine.glue", "chaospound.solvers.steppers",
 LAW_FUNCTIONS = ("point_force", "point_stiffness", "point_force_rate", "point_potential",
                  "line_force", "line_gradient", "line_force_rate", "line_potential")
 GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor")
-#: the kernel packages whose sources the key covers
-SOURCE_PACKAGES = ("kernels", "physics", "solvers", "engine")
 _PACKAGE = Path(__file__).resolve().parent.parent
 
 
@@ -178,7 +176,7 @@ class Composition:
 
 def _template_text(module: str) -> tuple[str, str]:
     """``(prefix, body)`` of a template module: its set-up (imports, constants;
-    without its docstring, the :mod:`.free` import and the decorators' import,
+    without its docstring, the :mod:`chaospound.kernels.free` import and the decorators' import,
     which the generated module binds) and its template text."""
     path = _module_path(module)
     source = path.read_text()
@@ -192,7 +190,7 @@ def _template_text(module: str) -> tuple[str, str]:
         is_doc = (isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant)
                   and isinstance(node.value.value, str))
         is_bound = isinstance(node, ast.ImportFrom) and node.module in (
-            "chaospound.engine.free", "chaospound.kernels.jit")
+            "chaospound.kernels.free", "chaospound.kernels.jit")
         if is_doc or is_bound:
             drop.update(range(node.lineno - 1, node.end_lineno))
     kept = "".join(line for i, line in enumerate(lines) if i not in drop)
@@ -287,15 +285,12 @@ _DIGEST: list[str] = []
 
 
 def source_digest() -> str:
-    """sha256 of every module of the kernel packages (names and bytes), memoised."""
+    """sha256 of every module of the kernel packages (:func:`.kernels.cache.source_digest`),
+    memoised per process."""
     if not _DIGEST:
-        digest = hashlib.sha256()
-        for package in SOURCE_PACKAGES:
-            for path in sorted((_PACKAGE / package).rglob("*.py")):
-                data = path.read_bytes()
-                digest.update(f"{path.relative_to(_PACKAGE)} {len(data)}\n".encode())
-                digest.update(data)
-        _DIGEST.append(digest.hexdigest())
+        from ..kernels.cache import source_digest as digest
+
+        _DIGEST.append(digest())
     return _DIGEST[0]
 
 

@@ -19,7 +19,7 @@ The event quantities are numbered (data, not kinds): 0, 1 the penetrations
 d_lo, d_hi; 2, 3 their rates; 4 the rate of the resultant contact force.
 """
 
-from chaospound.engine.free import DENSE_ROWS, model_ends, model_force_rate
+from chaospound.kernels.free import DENSE_ROWS, model_ends, model_force_rate
 from chaospound.kernels.jit import kernel
 from chaospound.solvers.dense import dense_eval
 

@@ -8,7 +8,7 @@ docs/model.md section 12, with the model's linearisation computed once per
 call and applied to each vector).
 """
 
-from chaospound.engine.free import (
+from chaospound.kernels.free import (
     GROUND,
     N_BASE,
     ground_at,

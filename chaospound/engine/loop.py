@@ -30,29 +30,6 @@ from chaospound.engine.bookkeeping import (
     store_sample,
 )
 from chaospound.engine.events import FORCE_RATE
-from chaospound.engine.free import (
-    ADAPTIVE,
-    DENSE_EVALS,
-    DENSE_ROWS,
-    GROUND,
-    N_BASE,
-    N_ENDS,
-    NEW_EVALS,
-    TANGENT,
-    controller,
-    dense_prepare,
-    end_value,
-    ground_anchor,
-    initial_step,
-    locate_extremum,
-    locate_root,
-    model_contact_point,
-    model_ends,
-    model_force_rate,
-    model_forces,
-    rhs,
-    step,
-)
 from chaospound.engine.tables import (
     IMP_CORNER,
     IMP_CYCLE,
@@ -76,6 +53,29 @@ from chaospound.engine.tables import (
     STATUS_OK,
     STATUS_OVERFLOW,
     STATUS_STEP_UNDERFLOW,
+)
+from chaospound.kernels.free import (
+    ADAPTIVE,
+    DENSE_EVALS,
+    DENSE_ROWS,
+    GROUND,
+    N_BASE,
+    N_ENDS,
+    NEW_EVALS,
+    TANGENT,
+    controller,
+    dense_prepare,
+    end_value,
+    ground_anchor,
+    initial_step,
+    locate_extremum,
+    locate_root,
+    model_contact_point,
+    model_ends,
+    model_force_rate,
+    model_forces,
+    rhs,
+    step,
 )
 from chaospound.kernels.jit import kernel
 from chaospound.kernels.params import P_PERIOD, P_PHASE0

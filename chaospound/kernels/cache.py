@@ -1,14 +1,17 @@
 """Numba's disk cache of the kernels, made safe to use after an edit.
 
 Numba stamps a cached function with the hash of its *own* source file only,
-so a cached ``integrate._run_cycles`` would keep serving the machine code of
-the ``contact.py`` or ``params.py`` it was compiled with.
-:func:`invalidate_stale_cache` therefore hashes every module of the kernels
-package (and numba's version) and, when the hash differs from the stamp kept
-beside the cache, deletes the package's cached kernels. :mod:`.jit`, which
-every module defining a kernel imports first, calls it once per process,
+so a cached ``hertz.line_force`` would keep serving the machine code of the
+``moments.py`` or ``params.py`` it was compiled with.
+:func:`invalidate_stale_cache` therefore hashes every module of the kernel
+packages (this one and its siblings :data:`SIBLINGS`: physics, solvers,
+engine; and numba's version) and, when the hash differs from the stamp kept
+beside this package's cache, deletes the cached kernels of all of them. :mod:`.jit`,
+which every module defining a kernel imports first, calls it once per process,
 before any kernel can be loaded; importing :mod:`.params` alone (the scene
-does) stays free of numba.
+does) stays free of numba. The generated engines
+(:mod:`chaospound.engine.compose`) need none of this: their file names carry
+the same hash.
 """
 
 from __future__ import annotations
@@ -26,15 +29,34 @@ STAMP_NAME = "chaospound-kernels.sha256"  #: the stamp file, in the kernels' cac
 _HERE = Path(os.path.dirname(os.path.abspath(__file__)))
 
 
+SIBLINGS = ("physics", "solvers", "engine")  #: the other kernel packages, beside this one
+
+
+def source_directories(directory: Path = _HERE) -> list[Path]:
+    """This package's directory and every directory of its sibling kernel packages."""
+    directory = Path(directory)
+    found = [directory]
+    for name in SIBLINGS:
+        root = directory.parent / name
+        if root.is_dir():
+            found += sorted({p.parent for p in root.rglob("*.py")})
+    return found
+
+
 def source_digest(directory: Path = _HERE) -> str:
-    """sha256 of numba's version and of every ``*.py`` of ``directory`` (name and bytes)."""
+    """sha256 of numba's version and of every ``*.py`` of the kernel packages (name and bytes).
+
+    ``directory`` is this package's directory (of a copy of the package, in the tests).
+    """
     import numba
 
     digest = hashlib.sha256(f"numba {numba.__version__}\n".encode())
-    for path in sorted(Path(directory).glob("*.py")):
-        data = path.read_bytes()
-        digest.update(f"{path.name} {len(data)}\n".encode())
-        digest.update(data)
+    base = Path(directory).parent
+    for folder in source_directories(directory):
+        for path in sorted(folder.glob("*.py")):
+            data = path.read_bytes()
+            digest.update(f"{path.relative_to(base)} {len(data)}\n".encode())
+            digest.update(data)
     return digest.hexdigest()
 
 
@@ -66,7 +88,7 @@ def cache_directory(directory: Path = _HERE) -> Path | None:
 
 
 def invalidate_stale_cache(directory: Path = _HERE) -> bool:
-    """Delete the cached kernels of ``directory`` if any of its sources changed.
+    """Delete the cached kernels of the kernel packages if any of their sources changed.
 
     Safe for processes starting together (two sweeps, pool workers): the cache
     files are deleted first, tolerating files another process already deleted,
@@ -88,10 +110,14 @@ def invalidate_stale_cache(directory: Path = _HERE) -> bool:
     with contextlib.suppress(OSError):
         if stamp.read_text().strip() == digest:
             return False
-    for pattern in ("*.nbi", "*.nbc"):
-        for path in cache.glob(pattern):
-            with contextlib.suppress(FileNotFoundError):
-                path.unlink()
+    for folder in source_directories(directory):
+        where = cache_directory(folder)
+        if where is None:
+            continue
+        for pattern in ("*.nbi", "*.nbc"):
+            for path in where.glob(pattern):
+                with contextlib.suppress(FileNotFoundError):
+                    path.unlink()
     temporary = cache / f"{STAMP_NAME}.{os.getpid()}.{uuid.uuid4().hex[:12]}.tmp"
     try:
         temporary.write_text(digest + "\n")

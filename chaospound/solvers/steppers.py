@@ -25,7 +25,7 @@ The error measure is ``<= 1`` for acceptance: DOPRI5's RMS norm of
 
 import math
 
-from chaospound.engine.free import (
+from chaospound.kernels.free import (
     ERROR_ORDER,
     GROUND,
     TAB_A,

@@ -8,8 +8,8 @@ import numpy as np
 
 from chaospound.kernels.jit import inline, kernel
 from chaospound.kernels.params import REF_0, REF_1, REF_2
+from chaospound.kernels.reference import duffing_rhs
 from chaospound.physics.corners import CORNER_FACE
-from chaospound.physics.reference import duffing_rhs
 
 # ==== template ====
 N_BASE = 2

@@ -8,8 +8,8 @@ import numpy as np
 
 from chaospound.kernels.jit import inline, kernel
 from chaospound.kernels.params import REF_0, REF_1, REF_2
+from chaospound.kernels.reference import lorenz_rhs
 from chaospound.physics.corners import CORNER_FACE
-from chaospound.physics.reference import lorenz_rhs
 
 # ==== template ====
 N_BASE = 3

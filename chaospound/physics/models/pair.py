@@ -6,7 +6,7 @@ X_B, X_B')``, a point contact ``d = X_A - X_B - a``. A template, as
 :mod:`chaospound.physics.models.towers`.
 """
 
-from chaospound.engine.free import (
+from chaospound.kernels.free import (
     LAW,
     law_point_force,
     law_point_force_rate,

@@ -5,7 +5,7 @@ docs/model.md section 9 (the reduction of the towers model to one tower). State
 :mod:`chaospound.physics.models.towers`; the wall moves with the ground.
 """
 
-from chaospound.engine.free import (
+from chaospound.kernels.free import (
     GROUND,
     LAW,
     ground_at,

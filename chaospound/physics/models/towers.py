@@ -23,7 +23,7 @@ The linearisation (variational equations, docs/model.md section 12)::
 with ``dF = F_c dd_c + F_s dslope`` and ``dM = M_c dd_c + M_s dslope``.
 """
 
-from chaospound.engine.free import (
+from chaospound.kernels.free import (
     LAW,
     law_line_force,
     law_line_force_rate,

@@ -14,7 +14,7 @@ are not known (0).
 
 import numpy as np
 
-from chaospound.engine.free import (
+from chaospound.kernels.free import (
     N_BASE,
     USER_BASE,
     USER_END,

@@ -4,7 +4,7 @@ docs/model.md section 9. State ``(X_A, X_A')``, a point contact ``d = X_A - u_g 
 A template, as :mod:`chaospound.physics.models.towers`.
 """
 
-from chaospound.engine.free import (
+from chaospound.kernels.free import (
     GROUND,
     LAW,
     ground_at,
