@@ -19,7 +19,6 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from chaospound.physics.contact.moments import EPS_SERIES, SERIES_MAX_TERMS, SERIES_RTOL
 from chaospound.kernels.params import (
     MODEL_NAMES,
     P_BETA,
@@ -47,6 +46,7 @@ from chaospound.kernels.params import (
     TOWERS,
     WALL,
 )
+from chaospound.physics.contact.moments import EPS_SERIES, SERIES_MAX_TERMS, SERIES_RTOL
 
 __all__ = ["python_fun", "python_rhs"]
 

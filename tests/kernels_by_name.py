@@ -29,7 +29,8 @@ from chaospound.kernels.params import (
     TOWERS,
     WALL,
 )
-from chaospound.physics.contact import hertz, moments as _moments
+from chaospound.physics.contact import hertz
+from chaospound.physics.contact import moments as _moments
 from chaospound.solvers import controllers, dense, tableaux
 
 _MODELS = {WALL: "wall", TOWER_WALL: "tower-wall", PAIR: "pair", TOWERS: "towers",

@@ -10,11 +10,10 @@ import json
 
 import numpy as np
 import pytest
+from kernels_by_name import EPS_SERIES, contact_ends, rhs
 
 from chaospound.bench import RUNS, load_python_twin, numba_fun
 from chaospound.cli import main
-from kernels_by_name import EPS_SERIES
-from kernels_by_name import contact_ends, rhs
 from chaospound.kernels.params import MODEL_DIMS, PAIR, TOWER_WALL, TOWERS, WALL
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate

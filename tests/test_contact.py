@@ -4,14 +4,15 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from kernels_by_name import (
     EPS_SERIES,
+    contact_forces,
+    contact_potential,
     line_contact,
     line_potential,
     moments,
 )
-from kernels_by_name import contact_forces, contact_potential
+
 from chaospound.kernels.params import TOWERS
 from chaospound.scene import load_preset
 

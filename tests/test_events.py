@@ -14,8 +14,8 @@ usable slope at the bracket's upper end, and on rates (extrema, EXTREMUM_TOL).
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from kernels_by_name import events, rk
+
 from chaospound.kernels.params import N_PARAMS, P_GAP, P_GROUND, P_PERIOD_RATIO, PAIR
 
 GAP = 0.5

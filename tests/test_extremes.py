@@ -44,9 +44,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from kernels_by_name import models
 
 from chaospound.cli import main
-from kernels_by_name import models
 from chaospound.engine.events import TIME_TOL
 from chaospound.scene import SceneError, load_preset
 from chaospound.simulate import Simulation, SimulationError, simulate

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from kernels_by_name import jacobian
 
 from chaospound.dynamics.lyapunov import (
     kaplan_yorke,
@@ -9,7 +10,6 @@ from chaospound.dynamics.lyapunov import (
     lyapunov_spectrum,
 )
 from chaospound.dynamics.system import System, duffing, lorenz
-from kernels_by_name import jacobian
 from chaospound.scene import load_preset
 
 CHAOTIC_FIG4 = load_preset("fig4").with_params(period_ratio=0.9, rtol=1e-8)

@@ -5,7 +5,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from kernels_by_name import (
     contact_ends,
     contact_forces,
@@ -14,6 +13,7 @@ from kernels_by_name import (
     jacobian_trace,
     rhs,
 )
+
 from chaospound.kernels.params import MODEL_DIMS, PAIR, TOWER_WALL, TOWERS, WALL
 from chaospound.scene import load_preset
 

@@ -17,11 +17,10 @@ import math
 
 import numpy as np
 import pytest
+from kernels_by_name import rhs, rk
 from scipy.integrate import DOP853 as ScipyDOP853
 from scipy.integrate import RK45 as ScipyRK45
 
-from kernels_by_name import rk
-from kernels_by_name import rhs
 from chaospound.kernels.params import (
     N_PARAMS,
     P_BETA,

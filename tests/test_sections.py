@@ -13,11 +13,11 @@ import json
 
 import numpy as np
 import pytest
+from kernels_by_name import contact_ends, penetration_rate
 
 from chaospound.dynamics.impact_map import ImpactMap, impact_map
 from chaospound.dynamics.poincare import Section, impact_section, stroboscopic_section
 from chaospound.dynamics.system import System, duffing
-from kernels_by_name import contact_ends, penetration_rate
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate
 

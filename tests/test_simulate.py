@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 import pytest
-
 from kernels_by_name import models
+
 from chaospound.kernels.params import MODEL_DIMS
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate
