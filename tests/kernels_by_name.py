@@ -45,7 +45,7 @@ def kernels(model: int, p: np.ndarray, method: int = 0):
     base = model - TANGENT if tangent else model
     ground = "sine" if p[P_GROUND] == 1.0 else "none"
     return engine_for(Composition(_MODELS[base], ground=ground, method=_METHODS[method],
-                                  tangent=tangent)).module
+                                  tangent="qr" if tangent else "none")).module
 
 
 # ------------------------------------------------------------------ models

@@ -164,7 +164,7 @@ def lyapunov_spectrum(
         augmented[n * (i + 1) + i] = 1.0
     logs = np.zeros((cycles, k))
     total = tangent_transient + cycles
-    _, _, stats = advance(system, augmented, total, tangent=True,
+    _, _, stats = advance(system, augmented, total, tangent="qr",
                           tangent_log=logs, record_from=tangent_transient)
     period = system.period
     exponents = logs.sum(axis=0) / (cycles * period)

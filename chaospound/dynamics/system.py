@@ -39,7 +39,7 @@ from ..scene import STATE_NAMES, Scene
 from ..solvers.tableaux import METHOD_NAMES
 
 __all__ = ["SimulationError", "System", "advance", "custom_system", "duffing", "lorenz",
-           "raise_on_failure"]
+           "monodromy", "raise_on_failure"]
 
 
 class SimulationError(RuntimeError):
@@ -133,8 +133,9 @@ class System:
                            law=self.law, ground=self.ground, method=self.method,
                            user=self.user)
 
-    def engine(self, tangent: bool = False) -> Engine:
-        """The compiled engine of this system (with tangent vectors: ``tangent``)."""
+    def engine(self, tangent: str = "none") -> Engine:
+        """The compiled engine of this system; ``tangent`` "qr" or "propagator" carries
+        tangent vectors (:class:`chaospound.engine.compose.Composition`)."""
         return engine_for(self.composition.with_tangent(tangent))
 
     @property
@@ -311,7 +312,7 @@ def _require_finite(label: str, values: np.ndarray) -> None:
         raise ValueError(f"{label} gave non-finite values on the initial state")
 
 
-def advance(system: System, state: np.ndarray, cycles: int, *, tangent: bool = False,
+def advance(system: System, state: np.ndarray, cycles: int, *, tangent: str = "none",
             tangent_log: np.ndarray | None = None, record_from: int | None = None,
             from_time_zero: bool = False):
     """Integrate ``cycles`` periods from a section; return (state, clock, stats).
@@ -319,10 +320,11 @@ def advance(system: System, state: np.ndarray, cycles: int, *, tangent: bool = F
     The run starts at the section (local time 0), or at t = 0 with
     ``from_time_zero`` (the scene's initial state), and ends on the section
     ``cycles`` periods later; contact events are landed on as in
-    :func:`chaospound.simulate.simulate`. With ``tangent``, ``state`` holds the
-    state followed by tangent vectors, which are re-orthonormalised at every
+    :func:`chaospound.simulate.simulate`. With ``tangent`` "qr", ``state`` holds
+    the state followed by tangent vectors, which are re-orthonormalised at every
     section, and the logs of the stretching factors of cycles ``record_from ..``
-    go to ``tangent_log``.
+    go to ``tangent_log``; with "propagator" the vectors of each cycle go there
+    (see :func:`monodromy`).
     """
     y = np.array(state, dtype=np.float64, copy=True)
     n = y.shape[0]
@@ -345,6 +347,34 @@ def advance(system: System, state: np.ndarray, cycles: int, *, tangent: bool = F
     if status != kin.STATUS_OK:
         raise_on_failure(status, stats, clock, system.period, system.max_steps, y)
     return y, clock, stats
+
+
+def monodromy(system: System, state: np.ndarray, periods: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """The state ``periods`` sections on and the monodromy matrix ``d x_k / d x_0``.
+
+    The variational equations ``V' = J V`` ride along the trajectory (the same
+    Jacobian-vector products as the Lyapunov exponents), started from the
+    identity at ``state``, a section; the engine stores and resets the vectors
+    at every section, and the matrix is the product of the per-section
+    propagators, formed here (no product of more than one period inside the
+    kernel, where its conditioning could suffer).
+
+    Returns
+    -------
+    (state, matrix) : (ndarray (n,), ndarray (n, n))
+    """
+    n = system.dim
+    augmented = np.zeros(n * (n + 1))
+    augmented[:n] = state
+    for i in range(n):
+        augmented[n * (i + 1) + i] = 1.0
+    log = np.zeros((periods, n * n))
+    y, _, _ = advance(system, augmented, periods, tangent="propagator", tangent_log=log,
+                      record_from=0)
+    matrix = np.eye(n)
+    for row in log:
+        matrix = row.reshape(n, n).T @ matrix
+    return y[:n].copy(), matrix
 
 
 def raise_on_failure(status, stats, clock, period, max_steps, y) -> None:

@@ -136,3 +136,21 @@ def store_sample(traj, row, t, state, n):
     traj[row, 0] = t
     for i in range(n):
         traj[row, i + 1] = state[i]
+
+
+@kernel
+def store_propagator(y, n_base, n_vectors, out, row):
+    """Store the tangent vectors after the state in ``out[row]`` and reset them to e_i.
+
+    Started from the unit vectors at the previous section, vector i is then
+    column i of the propagator of the last section interval (``out[row]``
+    reshaped to (n_vectors, n_base) is its transpose). Nothing is stored when
+    ``row`` is not a valid row (the tangent transient).
+    """
+    store = 0 <= row < out.shape[0]
+    for i in range(n_vectors):
+        a = n_base * (i + 1)
+        for c in range(n_base):
+            if store:
+                out[row, i * n_base + c] = y[a + c]
+            y[a + c] = 1.0 if c == i else 0.0

@@ -80,6 +80,7 @@ TEMPLATES = ("chaospound.engine.glue", "chaospound.solvers.steppers",
 LAW_FUNCTIONS = ("point_force", "point_stiffness", "point_force_rate", "point_potential",
                  "line_force", "line_gradient", "line_force_rate", "line_potential")
 GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor")
+TANGENTS = ("none", "qr", "propagator")  #: what may ride along the state
 _PACKAGE = Path(__file__).resolve().parent.parent
 
 
@@ -129,9 +130,12 @@ class Composition:
         A key of :data:`GROUNDS`.
     method : str
         A key of :data:`chaospound.solvers.tableaux.METHODS`.
-    tangent : bool
-        Tangent vectors follow the state (Lyapunov exponents): the
-        variational equations and QR at every section.
+    tangent : str
+        What rides along the state: "none"; "qr", tangent vectors of the
+        variational equations re-orthonormalised at every section (Lyapunov
+        exponents); "propagator", the same vectors stored and reset to the
+        identity at every section (the per-section propagators whose product is
+        a monodromy matrix: periodic orbits and their Floquet multipliers).
     user : UserFunctions or None
         A user system's functions (model "user").
     """
@@ -140,7 +144,7 @@ class Composition:
     law: str = "hertz"
     ground: str = "sine"
     method: str = "dopri5"
-    tangent: bool = False
+    tangent: str = "none"
     user: UserFunctions | None = None
 
     def __post_init__(self) -> None:
@@ -149,25 +153,27 @@ class Composition:
                                     ("method", self.method, METHODS)):
             if value not in known:
                 raise ValueError(f"{label} = {value!r}: need one of {', '.join(known)}")
+        if self.tangent not in TANGENTS:
+            raise ValueError(f"tangent = {self.tangent!r}: need one of {', '.join(TANGENTS)}")
         if (self.model == "user") != (self.user is not None):
             raise ValueError("a user model needs its functions, and only a user model has them")
 
     def canonical(self) -> str:
         """The composition as text (part of the key)."""
         text = (f"model={self.model};law={self.law};ground={self.ground};"
-                f"method={self.method};tangent={int(self.tangent)}")
+                f"method={self.method};tangent={self.tangent}")
         if self.user is not None:
             text += f";user={self.user.canonical()}"
         return text
 
-    def with_tangent(self, tangent: bool = True) -> Composition:
+    def with_tangent(self, tangent: str = "qr") -> Composition:
         return Composition(self.model, self.law, self.ground, self.method, tangent, self.user)
 
     def label(self) -> str:
         """Short human label: ``towers/hertz/sine/dopri5``."""
         parts = [self.model, self.law, self.ground, self.method]
-        if self.tangent:
-            parts.append("tangent")
+        if self.tangent != "none":
+            parts.append(self.tangent)
         return "/".join(parts)
 
 
@@ -225,7 +231,10 @@ def _bindings(c: Composition) -> str:
     lines += [
         f"LAW = {P_BETA}",
         f"GROUND = {P_PERIOD_RATIO}",
-        f"TANGENT = {c.tangent}",
+        f"TANGENT = {c.tangent != 'none'}",
+        "from chaospound.engine.bookkeeping import "
+        + ("store_propagator" if c.tangent == "propagator" else "orthonormalize")
+        + " as section_tangent",
         f"ADAPTIVE = {method.adaptive}",
         f"NEW_EVALS = {method.new_evals}",
         f"DENSE_EVALS = {method.dense_evals}",
@@ -259,7 +268,7 @@ def _footer(c: Composition) -> str:
         "# ---- the method's and the tangent's choices",
         f"step = {method.stepper}",
         f"dense_prepare = {method.dense}",
-        f"rhs_grounded = {'rhs_tangent' if c.tangent else 'rhs_plain'}",
+        f"rhs_grounded = {'rhs_plain' if c.tangent == 'none' else 'rhs_tangent'}",
     ]) + "\n"
 
 

@@ -25,7 +25,6 @@ from chaospound.engine.bookkeeping import (
     crossing_shift,
     landed_short,
     may_cross,
-    orthonormalize,
     sort_events,
     store_sample,
 )
@@ -75,6 +74,7 @@ from chaospound.kernels.free import (
     model_force_rate,
     model_forces,
     rhs,
+    section_tangent,
     step,
 )
 from chaospound.kernels.jit import kernel
@@ -121,11 +121,13 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         capacity 0 records no impacts.
     stats : ndarray of int64 (N_STATS,)
         Counters, see ST_*; ``stats[ST_STATUS]`` is the exit status.
-    tangent_log : ndarray (k_end - k_record, k)
+    tangent_log : ndarray
         Tangent compositions only (``y`` holding the state and k tangent
-        vectors): at every section the vectors are re-orthonormalised (modified
-        Gram-Schmidt, i.e. QR) and, for the cycles of the record window,
-        ``log R_ii`` of the cycle just ended is stored here.
+        vectors), at every section: "qr", shape (k_end - k_record, k), the
+        vectors are re-orthonormalised (modified Gram-Schmidt, i.e. QR) and, for
+        the cycles of the record window, ``log R_ii`` of the cycle just ended is
+        stored here; "propagator", shape (k_end - k_record, k n), the vectors of
+        the cycle just ended are stored here and reset to the unit vectors.
     vectors, scalars, ev_end : ndarray
         Workspaces: (MAX_STAGES + MAX_DENSE + 5, n), (N_SCALARS,) and
         (MAX_EVENTS,) int64. Compiled without numba's reference-counting
@@ -197,7 +199,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         if at_section:
             at_section = False
             if n_vectors > 0 and attempts > 0:
-                orthonormalize(y, n_base, n_vectors, tangent_log, k - 1 - k_record)
+                section_tangent(y, n_base, n_vectors, tangent_log, k - 1 - k_record)
                 rhs(t0, y, p, f0)
                 stats[ST_RHS_EVALS] += 1
             if k_record <= k <= k_end:

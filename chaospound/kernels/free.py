@@ -40,6 +40,6 @@ model_contact_point = _unbound
 # ---- user system
 user_rhs = user_jacobian = user_gap = _unbound
 # ---- method
-step = dense_prepare = controller = step_error = _unbound
+step = dense_prepare = controller = step_error = section_tangent = _unbound
 # ---- defined by the engine templates, used by others
 rhs = rhs_grounded = end_value = locate_root = locate_extremum = _unbound
