@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from numba import njit
 
 from chaospound.kernels import powers
 from chaospound.kernels.params import N_PARAMS, P_GROUND, P_PERIOD_RATIO
@@ -450,3 +451,39 @@ def test_stochastic_density_and_physical_units():
                                    model["intensity"])
     assert np.allclose(s_model, s_si / (length**2 * omega_ax**3), rtol=1e-13)
     assert model["dt"] == pytest.approx(0.01 * omega_ax)
+
+
+# --------------------------------------------------------------- inside a kernel
+def carried_walk(module):
+    """A compiled loop using the module as an engine would: carried state, at, next_kink."""
+    anchor, shifted, at_anchor, at, kink = (module.anchor, module.shifted, module.at_anchor,
+                                            module.at, module.next_kink)
+
+    @njit
+    def walk(p, base, t0, h, out):
+        c0, c1 = anchor(t0, p, base)
+        for k in range(out.shape[0]):
+            d0, d1 = shifted(c0, c1, (k + 1) * h, p, base)  # one shift from the anchor (DOPRI)
+            u, v = at_anchor(d0, d1, p, base)
+            u_ref, v_ref = at(t0 + (k + 1) * h, p, base)
+            out[k, 0] = u - u_ref
+            out[k, 1] = v - v_ref
+            out[k, 2] = kink(t0 + k * h, p, base)
+
+    return walk
+
+
+@pytest.mark.parametrize("module", MODULES, ids=lambda m: m.NAME)
+def test_carried_state_in_a_kernel(module):
+    times, accel = random_record(8, 80, uniform=True)
+    blocks = {"sine": sine.block({"period_ratio": 0.8}), "none": none.block({}),
+              "record": record.block_from_samples(times, accel),
+              "stochastic": stochastic.block({**SPEC, "duration": 20.0})}
+    p = np.concatenate([[np.nan, np.nan], blocks[module.NAME]])
+    out = np.empty((40, 3))
+    carried_walk(module)(p, 2, 1.3, 0.007, out)
+    assert np.max(np.abs(out[:, :2])) < 1e-13
+    if module.KINKS:
+        assert np.all(np.isfinite(out[:, 2])) and np.all(out[:, 2] > 1.3)
+    else:
+        assert np.all(np.isinf(out[:, 2]))
