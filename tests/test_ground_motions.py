@@ -286,6 +286,21 @@ def test_at2_glued_fields_d_exponent_and_units(tmp_path):
     assert np.array_equal(rec.time, np.arange(7) * 0.01)
 
 
+def test_at2_without_units_and_bom(tmp_path):
+    path = tmp_path / "plain.AT2"
+    text = at2_text("NPTS= 7, DT= .0100 SEC").replace("IN UNITS OF G", "")
+    path.write_text("\ufeff" + text, encoding="utf-8")
+    assert records_io.read_at2(path)[2] is None
+    g = records_io.STANDARD_GRAVITY
+    assert records_io.load_record(path).x[0] == float(AT2_VALUES[0]) * g
+    assert records_io.load_record(path, units="cm/s^2").x[0] == float(AT2_VALUES[0]) * 0.01
+    text_file = tmp_path / "bom.txt"
+    text_file.write_text("\ufeff0 1\n0.01 2\n", encoding="utf-8")
+    assert records_io.load_record(text_file, units="m/s^2").x.tolist() == [1.0, 2.0]
+    with pytest.raises(ValueError, match="'omega' is required"):
+        record.block({"file": str(path), "length_scale": 0.05})
+
+
 def test_two_at2_components_and_model_units(tmp_path):
     x, y = tmp_path / "x.AT2", tmp_path / "y.AT2"
     x.write_text(at2_text("NPTS= 7, DT= .0100 SEC"))

@@ -16,8 +16,8 @@ PEER NGA ``.AT2``
     then the NPTS acceleration values, up to 5 (or any number) a line, in free or
     Fortran E format (``.1234E-02``, ``-0.1234567E-02``, ``1.0D-3``). The first
     value is at t = 0, the k-th at ``k * DT``. The units are read from the header
-    (``UNITS OF G``, ``CM/S/S``, ``CM/SEC^2``, ``M/S/S``...); ``g`` if it states
-    none.
+    (``UNITS OF G``, ``CM/S/S``, ``CM/SEC^2``, ``M/S/S``...); if it states none,
+    the ``units`` argument of :func:`load_record`, else ``g``.
 Plain text
     Comment lines start with ``#``, ``%`` or ``!``; one header line of column
     names may precede the numbers; separators are blanks, commas, semicolons or
@@ -167,7 +167,7 @@ def _numbers(line: str, where: str) -> list[float]:
 
 def _read_lines(path: Path) -> list[str]:
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc.strerror or exc})") from None
     if not text.strip():
@@ -187,7 +187,7 @@ def _at2_units(header: Sequence[str], path: Path) -> str | None:
     return None
 
 
-def read_at2(path: str | Path) -> tuple[float, np.ndarray, str]:
+def read_at2(path: str | Path) -> tuple[float, np.ndarray, str | None]:
     """Read a PEER NGA ``.AT2`` file.
 
     Parameters
@@ -201,8 +201,8 @@ def read_at2(path: str | Path) -> tuple[float, np.ndarray, str]:
         Sample interval [s].
     acceleration : numpy.ndarray
         The NPTS values, in the file's units (the first at t = 0).
-    units : str
-        Canonical name of the units stated in the header (``"g"`` if none).
+    units : str or None
+        Canonical name of the units stated in the header, None if it states none.
 
     Raises
     ------
@@ -224,7 +224,7 @@ def read_at2(path: str | Path) -> tuple[float, np.ndarray, str]:
         raise ValueError(f"{path}: NPTS={npts}, need at least 2 samples")
     if not (math.isfinite(dt) and dt > 0.0):
         raise ValueError(f"{path}: DT={match.group('dt')} is not a positive interval")
-    units = _at2_units(lines[: index + 1], path) or "g"
+    units = _at2_units(lines[: index + 1], path)
     values: list[float] = []
     for number, line in enumerate(lines[index + 1 :], start=index + 2):
         values.extend(_numbers(line, f"{path}, line {number}"))
@@ -307,10 +307,14 @@ def _read_one(path: Path, units: str | None, dt: float | None) -> tuple[np.ndarr
     """(time [s], acceleration [m/s^2] of shape (n, k)) of one file of either format."""
     if path.suffix.lower() == ".at2":
         step, values, stated = read_at2(path)
-        if units is not None and unit_factor(units, str(path)) != UNITS[stated]:
+        if stated is None:
+            factor = unit_factor(units if units is not None else "g", str(path))
+        elif units is not None and unit_factor(units, str(path)) != UNITS[stated]:
             raise ValueError(f"{path}: the header states units {stated!r}, not {units!r}")
+        else:
+            factor = UNITS[stated]
         time = np.arange(len(values)) * step
-        return time, values[:, None] * UNITS[stated]
+        return time, values[:, None] * factor
     time, values = read_text(path, dt)
     factor = unit_factor(units if units is not None else "g", str(path))
     return time, values * factor
