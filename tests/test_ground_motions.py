@@ -502,3 +502,48 @@ def test_carried_state_in_a_kernel(module):
         assert np.all(np.isfinite(out[:, 2])) and np.all(out[:, 2] > 1.3)
     else:
         assert np.all(np.isinf(out[:, 2]))
+
+
+def test_stochastic_covariances_match_the_density():
+    """The exact recursion against integrals of the closed-form density (mpmath).
+
+    R(tau) = 2 int_0^inf S(w) cos(w tau) dw must equal c Phi^m P c^T at tau = m dt,
+    and P must be stationary under the recursion: P = Phi P Phi^T + Q.
+    """
+    mpmath = pytest.importorskip("mpmath")
+    wg, zg, wf, zf, s0, dt = 2.5, 0.6, 0.25, 0.6, 1.0, 0.1
+    phi, q_factor, p_factor, c = stochastic.discretisation(wg, zg, wf, zf, s0, dt)
+    cov = p_factor @ p_factor.T
+    stationary = phi @ cov @ phi.T + q_factor @ q_factor.T
+    assert np.allclose(stationary, cov, rtol=0.0, atol=1e-12 * abs(cov).max())
+
+    def density(w):
+        return kt_cp_reference(w, mpmath.mpf(wg), zg, wf, zf, s0)
+
+    for m in (0, 1, 7, 30):
+        tau = m * dt
+        with mpmath.workdps(20):
+            if m == 0:
+                exact = 2 * mpmath.quad(density, [0, wf, wg, 10 * wg, mpmath.inf])
+            else:
+                exact = 2 * mpmath.quadosc(lambda w, tau=tau: density(w) * mpmath.cos(w * tau),
+                                           [0, mpmath.inf], omega=tau)
+        model = c @ np.linalg.matrix_power(phi, m) @ cov @ c
+        assert model == pytest.approx(float(exact), rel=1e-8, abs=1e-9), m
+
+
+def test_stochastic_envelope_variance():
+    """Ensemble variance of Jennings-modulated realisations = e(t)^2 sigma^2, within its error."""
+    realisations = 1000
+    spec = {**SPEC, "duration": 40.0, "envelope": "jennings", "t_rise": 5.0,
+            "t_plateau": 15.0, "decay": 0.1}
+    runs = np.array([stochastic.generate({**spec, "seed": 50_000 + i})[1]
+                     for i in range(realisations)])
+    _, _, p_factor, c = stochastic.discretisation(2.5, 0.6, 0.25, 0.6, 1.0, SPEC["dt"])
+    sigma2 = c @ p_factor @ p_factor.T @ c
+    t = np.arange(runs.shape[1]) * SPEC["dt"]
+    expected = stochastic.envelope(t, spec) ** 2 * sigma2
+    keep = expected > 0.0
+    z = (runs[:, keep] ** 2).mean(axis=0) / expected[keep] - 1.0
+    z *= math.sqrt(realisations / 2.0)  # a^2 / var is chi-square(1): variance 2
+    assert abs(z.mean()) < 5.0 / math.sqrt(keep.sum() / 20.0) and np.max(np.abs(z)) < 5.5
