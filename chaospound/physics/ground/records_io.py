@@ -213,11 +213,11 @@ def read_at2(path: str | Path) -> tuple[float, np.ndarray, str | None]:
     """
     path = Path(path)
     lines = _read_lines(path)
-    found = [(index, match) for index, line in enumerate(lines)
-             if (match := _HEADER_NEW.search(line) or _HEADER_OLD.search(line))]
-    if not found:
+    found = next(((index, match) for index, line in enumerate(lines)
+                  if (match := _HEADER_NEW.search(line) or _HEADER_OLD.search(line))), None)
+    if found is None:
         raise ValueError(f"{path}: no 'NPTS=..., DT=...' line in the AT2 header")
-    index, match = found[0]
+    index, match = found
     npts = int(match.group("n"))
     dt = _parse_float(match.group("dt"))
     if npts < 2:
