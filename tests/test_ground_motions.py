@@ -184,6 +184,29 @@ def test_record_sampled_sine_converges_at_second_order():
     assert all(1.9 < q < 2.1 for q in orders), (errors, orders)
 
 
+def test_record_of_a_sampled_sine_reproduces_the_sine_module():
+    """Sine sampled at dt, from (u, u') = (0, 1/r): u and u' converge to sine.at at order 2."""
+    r = 0.8
+    p_sine = sine.block({"period_ratio": r})
+    span = 3.0 * 2.0 * math.pi * r
+    probe = np.linspace(0.0, span, 1501)
+    errors = []
+    for dt in (0.16, 0.08, 0.04, 0.02):
+        t = np.arange(int(round(span / dt)) + 1) * dt
+        a = np.array([sine.acceleration(float(x), p_sine, 0) for x in t])
+        p = record.block_from_samples(t, a, baseline="none", initial_x=(0.0, 1.0 / r))
+        err = 0.0
+        for x in probe:
+            u, v = record.at(float(x), p, 0)
+            u_ref, v_ref = sine.at(float(x), p_sine, 0)
+            err = max(err, abs(u - u_ref), abs(v - v_ref))
+        errors.append(err)
+    orders = [math.log2(a / b) for a, b in zip(errors, errors[1:], strict=False)]
+    assert all(1.9 < q < 2.1 for q in orders), (errors, orders)
+    u, v = record.at(-0.5, p, 0)  # before the first sample: the initial state's straight line
+    assert (u, v) == (-0.5 / r, 1.0 / r)
+
+
 def test_record_continuity_at_samples():
     times, accel = random_record(3, 40, uniform=False)
     p = record.block_from_samples(times, accel)

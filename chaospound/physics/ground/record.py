@@ -18,16 +18,18 @@ with the sample values from the exact recursion (``u_0 = v_0 = 0``)::
 
 (summed with Neumaier's compensation). u_g and u_g' are continuous, u_g'' is
 continuous with kinks at the samples (hence ``KINKS``: the integrator lands on
-every sample time, :func:`next_kink`). Before the first sample the ground is at
-rest at ``(u_0, v_0) = (0, 0)``; after the last one u_g'' = 0 and the ground
-moves on with its final velocity (zero after the default baseline correction).
+every sample time, :func:`next_kink`). Before the first sample u_g'' = 0 and the
+ground moves on the straight line of its initial state (at rest at 0 for a
+record; ``initial_x`` of :func:`block_from_samples` for a sampled analytic
+motion); after the last one u_g'' = 0 and the ground moves on with its final
+velocity (zero after the default baseline correction).
 
 Baseline correction (``baseline="rest"``, the default)
 ------------------------------------------------------
 Integrating a real accelerogram twice leaves a drift: a small offset of the
 baseline makes u_g grow like t^2. The correction subtracts from the
 acceleration the linear function ``c0 + c1 (t - t_0)`` chosen so that the ground
-ends at rest where it started, ``u_g(t_end) = u_g'(t_end) = 0`` (a closed-form
+ends at rest where it started, ``u_g(t_end) = u_0, u_g'(t_end) = 0`` (a closed-form
 2x2 system). Why this one: a linear function of time is exactly representable by
 the piecewise-linear interpolant, so the corrected record stays in the class
 integrated exactly above (no resampling, no filter); it keeps the initial state
@@ -68,7 +70,9 @@ BASELINES = ("rest", "none")
 
 
 # ------------------------------------------------------------------ Python side
-def integrate(t: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def integrate(
+    t: np.ndarray, a: np.ndarray, u0: float = 0.0, v0: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Sample displacements and velocities of the piecewise-linear acceleration.
 
     Parameters
@@ -77,17 +81,20 @@ def integrate(t: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         Sample times (dimensionless), strictly increasing.
     a : numpy.ndarray
         Accelerations at ``t`` (dimensionless).
+    u0, v0 : float
+        ``u_g`` and ``u_g'`` at the first sample (A_g, A_g omega_Ax); 0 for a record.
 
     Returns
     -------
     u, v : numpy.ndarray
-        ``u_g`` and ``u_g'`` at the samples, from ``u_0 = v_0 = 0`` by the exact
-        recursion of the module docstring (Neumaier-compensated sums).
+        ``u_g`` and ``u_g'`` at the samples by the exact recursion of the module
+        docstring (Neumaier-compensated sums).
     """
     n = len(t)
-    u = np.zeros(n)
-    v = np.zeros(n)
-    u_sum = u_comp = v_sum = v_comp = 0.0
+    u = np.full(n, float(u0))
+    v = np.full(n, float(v0))
+    u_sum, v_sum = float(u0), float(v0)
+    u_comp = v_comp = 0.0
     t_list = t.tolist()
     a_list = a.tolist()
     for k in range(n - 1):
@@ -107,22 +114,28 @@ def integrate(t: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, v
 
 
-def baseline_rest(t: np.ndarray, a: np.ndarray) -> np.ndarray:
-    """The acceleration minus ``c0 + c1 (t - t_0)`` that brings the ground to rest at 0.
+def baseline_rest(t: np.ndarray, a: np.ndarray, u0: float = 0.0, v0: float = 0.0) -> np.ndarray:
+    """The acceleration minus ``c0 + c1 (t - t_0)`` that brings the ground to rest at ``u0``.
 
-    ``c0, c1`` solve ``u(T) = v(T) = 0`` for the corrected record, ``T = t_end - t_0``:
-    ``c0 T + c1 T^2 / 2 = v_raw(T)`` and ``c0 T^2 / 2 + c1 T^3 / 6 = u_raw(T)``.
+    ``c0, c1`` solve ``u(T) = u0, v(T) = 0`` for the corrected record (``T = t_end - t_0``):
+    ``c0 T + c1 T^2 / 2 = v_raw(T)`` and ``c0 T^2 / 2 + c1 T^3 / 6 = u_raw(T) - u0``.
     """
-    u, v = integrate(t, a)
+    u, v = integrate(t, a, u0, v0)
+    du, dv = u[-1] - u0, v[-1]
     span = t[-1] - t[0]
-    # Cramer on [[T, T^2/2], [T^2/2, T^3/6]] (c0, c1) = (v, u), determinant -T^4 / 12
-    c0 = 6.0 * u[-1] / (span * span) - 2.0 * v[-1] / span
-    c1 = 6.0 * v[-1] / (span * span) - 12.0 * u[-1] / (span * span * span)
+    # Cramer on [[T, T^2/2], [T^2/2, T^3/6]] (c0, c1) = (dv, du), determinant -T^4 / 12
+    c0 = 6.0 * du / (span * span) - 2.0 * dv / span
+    c1 = 6.0 * dv / (span * span) - 12.0 * du / (span * span * span)
     return a - (c0 + c1 * (t - t[0]))
 
 
 def block_from_samples(
-    t: np.ndarray, a_x: np.ndarray, a_y: np.ndarray | None = None, baseline: str = "rest"
+    t: np.ndarray,
+    a_x: np.ndarray,
+    a_y: np.ndarray | None = None,
+    baseline: str = "rest",
+    initial_x: tuple[float, float] = (0.0, 0.0),
+    initial_y: tuple[float, float] = (0.0, 0.0),
 ) -> np.ndarray:
     """The block of a record given in model units.
 
@@ -135,6 +148,10 @@ def block_from_samples(
         for one component.
     baseline : {"rest", "none"}
         The baseline correction (module docstring).
+    initial_x, initial_y : (float, float)
+        ``(u_g, u_g')`` at the first sample (A_g, A_g omega_Ax); a record starts
+        from rest, a sampled analytic motion (a sine from its phase) need not.
+        Before the first sample the ground moves on this state's straight line.
 
     Returns
     -------
@@ -159,10 +176,12 @@ def block_from_samples(
         if not np.all(np.isfinite(a)):
             raise ValueError("record: non-finite acceleration")
     parts = [np.array([n, len(components), (n - 1) / (t[-1] - t[0])]), t]
-    for a in components:
+    for a, (u0, v0) in zip(components, (initial_x, initial_y), strict=False):
+        if not (math.isfinite(u0) and math.isfinite(v0)):
+            raise ValueError("record: non-finite initial state")
         if baseline == "rest":
-            a = baseline_rest(t, a)
-        u, v = integrate(t, a)
+            a = baseline_rest(t, a, u0, v0)
+        u, v = integrate(t, a, u0, v0)
         parts += [u, v, a]
     return np.concatenate(parts)
 
@@ -173,7 +192,8 @@ def block(spec: Mapping[str, Any]) -> np.ndarray:
     Parameters
     ----------
     spec : mapping
-        Either ``t``, ``a_x`` (and optionally ``a_y``) already in model units, or
+        Either ``t``, ``a_x`` (and optionally ``a_y``, ``initial_x``, ``initial_y``)
+        already in model units (:func:`block_from_samples`), or
         ``file`` (a path or a pair of paths), with ``units`` (optional), ``dt``
         [s] (text without a time column), ``scale`` (default 1),
         ``length_scale`` A_g [m] and ``omega`` omega_Ax [rad/s], converted by
@@ -199,7 +219,8 @@ def block(spec: Mapping[str, Any]) -> np.ndarray:
         raise ValueError("record: give 'file' or the samples 't' and 'a_x'")
     return block_from_samples(np.asarray(spec["t"]), np.asarray(spec["a_x"]),
                               None if spec.get("a_y") is None else np.asarray(spec["a_y"]),
-                              baseline)
+                              baseline, tuple(spec.get("initial_x", (0.0, 0.0))),
+                              tuple(spec.get("initial_y", (0.0, 0.0))))
 
 
 def period(values: np.ndarray) -> None:
@@ -243,7 +264,7 @@ def _evaluate(t, p, base, first):
     if t != t:
         return math.nan, math.nan, math.nan
     if not t >= p[d]:
-        return p[c], p[c + n], 0.0
+        return p[c] + p[c + n] * (t - p[d]), p[c + n], 0.0
     last = n - 1
     if t >= p[d + last]:
         s = t - p[d + last]
