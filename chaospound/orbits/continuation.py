@@ -384,6 +384,9 @@ def _run_direction(base: StroboscopicMap, start: _Point, t0: np.ndarray, k: int,
             continue
         if not lo <= b.lam <= hi:
             edge = hi if b.lam > hi else lo
+            reason = f"reached {base.parameter} = {edge:g}"
+            if abs(edge - a.lam) <= 1e-12 * max(1.0, abs(edge)):
+                break  # already on the edge (a start at the interval's end)
             try:
                 x0 = a.x + (b.x - a.x) * (edge - a.lam) / (b.lam - a.lam)
                 smap = base.with_parameter(value=edge)
@@ -398,7 +401,6 @@ def _run_direction(base: StroboscopicMap, start: _Point, t0: np.ndarray, k: int,
                 tangents.append(t_e)
             except (OrbitNotFound, SimulationError):
                 pass
-            reason = f"reached {base.parameter} = {edge:g}"
             break
         if detect:
             specials += _specials_between(base, a, t_a, b, t_b, k, tol=tol, locate=locate,
