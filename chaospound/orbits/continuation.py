@@ -273,8 +273,11 @@ def _locate(base: StroboscopicMap, a: _Point, t_a: np.ndarray, b: _Point, k: int
     else:
         f_lo, f_hi = test(a), test(b)
     side = 0
+    s_total = abs(s_hi)
     for _ in range(max_iter):
-        if abs(p_hi.lam - p_lo.lam) <= locate_tol and abs(s_hi - s_lo) <= 1e-3 * abs(s_hi):
+        # the parameter to locate_tol; the arclength too (to 1e-6 of the step), since at a
+        # fold the parameter is stationary and would stop the search far from the root
+        if abs(p_hi.lam - p_lo.lam) <= locate_tol and abs(s_hi - s_lo) <= 1e-6 * s_total:
             break
         if abs(s_hi - s_lo) <= 1e-14 * max(1.0, abs(s_hi)):
             break
