@@ -178,31 +178,49 @@ def _evaluate(base: StroboscopicMap, x: np.ndarray, lam: float, k: int):
 
 def _correct(base: StroboscopicMap, y_pred: np.ndarray, t: np.ndarray, k: int, *,
              tol: float, max_iter: int = 8) -> _Point:
-    """Newton on [P^k(x; lam) - x; t . (y - y_pred)] = 0 from y_pred."""
+    """Newton on [P^k(x; lam) - x; t . (y - y_pred)] = 0 from y_pred.
+
+    Chord iterations: the bordered Jacobian of the predicted point is kept while the
+    residual falls at least fourfold per iteration (one run of k periods each), and
+    evaluated afresh otherwise; the converged point gets its own M and dP/dlambda
+    (for the tangent and the test functions).
+    """
     n = y_pred.shape[0] - 1
     y = y_pred.copy()
     eye = np.eye(n)
     last = np.inf
+    smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
+    fresh = True
+    jac = None
+    res = np.inf
     for it in range(max_iter + 1):
-        smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
         g = xk - y[:n]
         res = float(np.max(np.abs(g))) / state_scale(y[:n])
         if not np.isfinite(res):
             raise OrbitNotFound("corrector: non-finite residual")
         if res <= tol:
+            if not fresh:
+                smap, _, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
             return _Point(smap, y[:n].copy(), float(y[n]), m, p_lam, res, it, k)
         if it == max_iter or (it >= 2 and res > 0.5 * last):
             break
+        if not fresh and res > 0.25 * last:  # slow chord: a fresh Jacobian
+            smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
+            fresh = True
+        if fresh:
+            jac = np.zeros((n + 1, n + 1))
+            jac[:n, :n] = m - eye
+            jac[:n, n] = p_lam
+            jac[n] = t
         last = res
-        jac = np.zeros((n + 1, n + 1))
-        jac[:n, :n] = m - eye
-        jac[:n, n] = p_lam
-        jac[n] = t
         rhs = np.append(-g, -float(t @ (y - y_pred)))
         try:
             y = y + np.linalg.solve(jac, rhs)
         except np.linalg.LinAlgError:
             break
+        smap = base.with_parameter(value=float(y[n]))
+        xk = smap.advance(y[:n], k)
+        fresh = False
     raise OrbitNotFound(f"corrector: no convergence (relative residual {res:.2e})")
 
 

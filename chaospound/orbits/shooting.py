@@ -2,7 +2,9 @@
 
 A period-k orbit (k forcing periods) is a fixed point of P^k, solved by
 Newton's method on F(x) = P^k(x) - x with the Jacobian M - I, M the
-monodromy matrix of the map's provider (:mod:`chaospound.orbits.maps`).
+monodromy matrix of the map's provider (:mod:`chaospound.orbits.maps`), kept
+from an earlier iterate while the residual falls at least twofold per
+iteration (chord steps: one run of k periods each instead of a matrix).
 Safeguards: the Newton step is cut to a trust radius (``trust`` times the
 state scale max(1, |x|_inf)) and then backtracked (halved) until the residual
 decreases; converged when |F|_inf <= tol * max(1, |x|_inf) (default 1e-10).
@@ -130,7 +132,7 @@ class Orbit:
 
 def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                        tol: float = ORBIT_TOL, max_iter: int = 40, trust: float = 1.0,
-                       ) -> tuple[np.ndarray, np.ndarray, float, int]:
+                       chord: bool = True) -> tuple[np.ndarray, np.ndarray, float, int]:
     """Solve P^k(x) = x by safeguarded Newton's method.
 
     Parameters
@@ -146,6 +148,11 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
         Newton iterations allowed.
     trust : float
         Largest step, relative to max(1, |x|_inf) (inf-norm).
+    chord : bool
+        Keep the monodromy of an earlier iterate while the residual falls at least
+        twofold per iteration (the chord method: one run of k periods per iteration
+        instead of a whole matrix), and evaluate it afresh when it does not. The
+        returned matrix is always evaluated at the returned state.
 
     Returns
     -------
@@ -160,8 +167,10 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
     x = np.array(x0, dtype=np.float64)
     n = x.shape[0]
     eye = np.eye(n)
+    res = float("nan")
     try:
         xk, m = smap.monodromy(x, k)
+        fresh = True  # m was evaluated at x
         for it in range(max_iter + 1):
             f = xk - x
             res = float(np.max(np.abs(f))) / state_scale(x)
@@ -169,6 +178,8 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                 raise OrbitNotFound(f"period-{k} orbit: the residual became non-finite at "
                                     f"iteration {it}")
             if res <= tol:
+                if not fresh:
+                    _, m = smap.monodromy(x, k)
                 return x, m, res, it
             if it == max_iter:
                 break
@@ -196,8 +207,10 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
             if not np.isfinite(norm):
                 raise OrbitNotFound(f"period-{k} orbit: the integration failed along the "
                                     f"Newton step at iteration {it}")
-            x = x_try
-            xk, m = smap.monodromy(x, k)
+            x, xk, fresh = x_try, xk_try, False
+            if not chord or norm > 0.5 * norm0:
+                xk, m = smap.monodromy(x, k)
+                fresh = True
     except OrbitNotFound:
         raise
     except SimulationError as exc:
