@@ -557,8 +557,8 @@ def continue_branch(obj: System | Scene | StroboscopicMap, parameter: str, start
     Returns
     -------
     Branch
-        Points in the order of the curve, from the ``stop``-ward end's
-        opposite to... i.e. the backward run reversed, then the forward run.
+        Points in the order of the curve: the run away from ``stop`` reversed, then
+        the run towards ``stop`` (the start orbit once, between them).
 
     Raises
     ------
@@ -572,11 +572,9 @@ def continue_branch(obj: System | Scene | StroboscopicMap, parameter: str, start
     smap = smap.with_parameter(parameter, start)
     orbit = find_orbit(smap, period=period, initial_state=initial_state, transient=transient)
     direction = 1.0 if stop >= start else -1.0
-    directions = (direction, -direction) if both else (direction,)
+    # with both, the first run (reported reversed) goes away from stop
+    directions = (-direction, direction) if both else (direction,)
     lo, hi = min(start, stop), max(start, stop)
-    if both:
-        # the branch is reported backward-reversed then forward: forward is towards stop
-        directions = (-direction, direction)
     return continue_from(smap, orbit, lo, hi, directions=directions, **options)
 
 
