@@ -1466,7 +1466,10 @@ def _add_plot(commands: argparse._SubParsersAction) -> None:
         "The format follows the output's extension: .png (raster, see --dpi), .pdf or .svg "
         "(vector, for papers); an existing figure is redrawn.",
     )
-    parser.add_argument("sweep_file", metavar="SWEEP.h5", help="a file of 'chaospound sweep'")
+    parser.add_argument("sweep_file", metavar="SWEEP.h5",
+                        help="a file of 'chaospound sweep', or a branch file of 'chaospound "
+                        "continue' (then the branches' bifurcation diagram beside their "
+                        "Floquet multipliers)")
     parser.add_argument("-o", "--output", metavar="FILE",
                         help="the figure: FILE.png, FILE.pdf or FILE.svg (default: the sweep "
                         "file with .png)")
@@ -2065,9 +2068,12 @@ def _cmd_continue(args: argparse.Namespace) -> int:
                     _note(f"no period-{2 * args.period} branch off the period doubling at "
                           f"{name} = {sp.value:.10g}: {exc}")
     wall = time.perf_counter() - start
-    write_branches(args.output, branches, scene_toml=scene.to_toml(),
-                   model=smap.system.model_name, system=scene.name,
-                   state_names=tuple(smap.system.state_names))
+    try:
+        write_branches(args.output, branches, scene_toml=scene.to_toml(),
+                       model=smap.system.model_name, system=scene.name,
+                       state_names=tuple(smap.system.state_names))
+    except OSError as exc:  # a full disk: the work is lost, nothing half-written is left
+        return _fail(f"cannot write {_path(args.output)}: {exc.strerror or exc}", EXIT_FAILURE)
     summary = {"output": args.output, "parameter": name, "interval": [a, b], "wall_s": wall,
                "branches": [{"name": br.name, "period_cycles": br.period, "points": len(br),
                              "stable_points": int(br.stable.sum()),
