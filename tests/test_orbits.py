@@ -18,7 +18,7 @@ import pytest
 from chaospound.cli import main
 from chaospound.dynamics.lyapunov import _constant_trace, lyapunov_spectrum
 from chaospound.dynamics.system import advance, duffing
-from chaospound.orbits import OrbitNotFound, StroboscopicMap, find_orbit
+from chaospound.orbits import OrbitNotFound, StroboscopicMap, find_orbit, orbit_trajectory
 from chaospound.orbits.continuation import continue_branch, switch_period_doubling
 from chaospound.orbits.shooting import newton_fixed_point, orbit_at
 from chaospound.orbits.store import open_branches, write_branches
@@ -124,6 +124,15 @@ def test_fig3a_orbit_equals_long_forward_integration(fig3a_orbit):
     np.testing.assert_allclose(run.impacts.velocity, np.tile(orbit.impact_velocity, 2),
                                rtol=0, atol=1e-8)
     np.testing.assert_allclose(run.impacts.phase, np.tile(orbit.impact_phase, 2), atol=1e-8)
+
+
+def test_orbit_trajectory_closes_on_itself(fig3a_orbit):
+    smap, orbit = fig3a_orbit
+    run = orbit_trajectory(smap, orbit, samples_per_cycle=50)
+    states = run.trajectory.state
+    assert states.shape == (51, 12)
+    np.testing.assert_allclose(states[-1], states[0], atol=1e-9)
+    np.testing.assert_allclose(run.impacts.velocity, orbit.impact_velocity, atol=1e-12)
 
 
 def test_fig3a_floquet_exponent_equals_qr_lyapunov_exponent(fig3a_orbit):
@@ -377,6 +386,14 @@ def test_period_doubling_matches_brute_force_and_switches_to_its_period_2(tmp_pa
     np.testing.assert_allclose(np.sort(orbit.impact_velocity), observed, atol=2e-3)
     # and it is not the period-1 orbit: two different impacts per period
     assert abs(orbit.impact_velocity[0] - orbit.impact_velocity[1]) > 0.3
+    # continued back from 0.715, the period-2 branch turns where it meets its parent:
+    # reported as the period doubling's vertex (a pitchfork of P^2, not a fold)
+    back = continue_branch(smap.with_parameter(value=0.715), "period_ratio", 0.715, 0.70,
+                           period=2, both=False, transient=300)
+    assert back.orbits[0].label == "2-2"
+    [vertex] = back.special
+    assert vertex.kind == "period-doubling" and "vertex" in vertex.note
+    assert abs(vertex.value - pd.value) < 1e-6
 
 
 def test_orbit_record_and_parameter_maps():

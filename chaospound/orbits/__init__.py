@@ -13,7 +13,7 @@ docs/orbits.md gives the method and the choices.
 from __future__ import annotations
 
 from .maps import StroboscopicMap, finite_difference_monodromy
-from .shooting import Orbit, OrbitNotFound, find_orbit
+from .shooting import Orbit, OrbitNotFound, find_orbit, orbit_trajectory
 
 __all__ = ["Orbit", "OrbitNotFound", "StroboscopicMap", "find_orbit",
-           "finite_difference_monodromy"]
+           "finite_difference_monodromy", "orbit_trajectory"]

@@ -350,6 +350,35 @@ def _critical_vector(m: np.ndarray, target: float) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
+def _doubling_vertex(base: StroboscopicMap, sp: SpecialPoint) -> SpecialPoint | None:
+    """A "fold" of a period-2m branch where it meets its period-m parent, relabelled.
+
+    There the period-2m branch, lambda - lambda* ~ c a^2 in its amplitude a, turns at
+    a pitchfork of P^2m (the parent's period doubling), not at a fold; the located
+    point, found on det(M - I) = 0 where the two branches almost coincide, is accurate
+    only to about c a^2 (3e-7 in T/T_Ax on fig4-translational). Recognised by a
+    period-m orbit next to the point with a multiplier near -1.
+    """
+    from dataclasses import replace
+
+    orbit = sp.orbit
+    if orbit.period % 2:
+        return None
+    half = orbit.period // 2
+    at = base.with_parameter(value=sp.value)
+    try:
+        x, m, _, _ = newton_fixed_point(at, orbit.state, half, max_iter=8)
+    except (OrbitNotFound, SimulationError):
+        return None
+    if np.max(np.abs(x - orbit.state)) > 0.05 * state_scale(x):
+        return None
+    if np.min(np.abs(np.linalg.eigvals(m) + 1.0)) > 0.05:
+        return None
+    return replace(sp, kind="period-doubling",
+                   note=f"vertex: the period-{orbit.period} branch meets its period-{half} "
+                   "parent (a pitchfork of the doubled map; located to about c a^2)")
+
+
 def _specials_between(base, a: _Point, t_a, b: _Point, t_b, k, *, tol, locate, locate_tol,
                       index: int) -> list[SpecialPoint]:
     """Detect (and locate) the bifurcations between consecutive points a and b."""
@@ -367,6 +396,9 @@ def _specials_between(base, a: _Point, t_a, b: _Point, t_b, k, *, tol, locate, l
 
     if np.sign(t_a[-1]) != np.sign(t_b[-1]) and t_a[-1] != 0.0:
         add("fold", _fold_test, 1.0)
+        vertex = _doubling_vertex(base, found[-1])
+        if vertex is not None:
+            found[-1] = vertex
     if np.sign(_pd_test(a)) != np.sign(_pd_test(b)):
         add("period-doubling", _pd_test, -1.0)
     if _complex_outside(a) != _complex_outside(b):

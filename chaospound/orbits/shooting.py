@@ -24,7 +24,8 @@ from ..kernels.integrate import CORNER_LABELS
 from ..scene import Scene
 from .maps import StroboscopicMap, state_scale
 
-__all__ = ["Orbit", "OrbitNotFound", "find_orbit", "newton_fixed_point", "orbit_at"]
+__all__ = ["Orbit", "OrbitNotFound", "find_orbit", "newton_fixed_point", "orbit_at",
+           "orbit_trajectory"]
 
 ORBIT_TOL = 1e-10  #: default residual, relative to max(1, |x|_inf)
 
@@ -297,3 +298,28 @@ def find_orbit(obj: StroboscopicMap | Scene | object, *, period: int = 1,
                              "values")
     x, m, res, it = newton_fixed_point(smap, x0, k, tol=tol, max_iter=max_iter)
     return orbit_at(smap, x, k, m, res, it)
+
+
+def orbit_trajectory(smap: StroboscopicMap, orbit: Orbit, samples_per_cycle: int = 200):
+    """One period of the orbit as a dense trajectory (and its impacts).
+
+    Parameters
+    ----------
+    smap : StroboscopicMap
+        The map the orbit was found with (at the orbit's parameter value).
+    orbit : Orbit
+    samples_per_cycle : int
+        Samples per forcing cycle (>= 1).
+
+    Returns
+    -------
+    chaospound.simulate.Simulation
+        ``trajectory.time`` (normalised time from the section) and
+        ``trajectory.state`` over k forcing cycles, ``impacts`` of that period.
+    """
+    from ..simulate import simulate
+
+    if samples_per_cycle < 1:
+        raise ValueError(f"samples_per_cycle = {samples_per_cycle}: need >= 1")
+    return simulate(smap.system, transient=0, record=orbit.period, initial_state=orbit.state,
+                    start_at_section=True, samples_per_cycle=int(samples_per_cycle))
