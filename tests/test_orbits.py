@@ -411,3 +411,41 @@ def test_orbit_record_and_parameter_maps():
     x, m, res, it = newton_fixed_point(other, np.zeros(2), 1)
     orbit = orbit_at(other, x, 1, m, res, it)
     assert orbit.value == 6.0 and orbit.parameter == "gap"
+
+
+# ------------------------------------------------------------- Neimark-Sacker
+def test_fig3a_orbit_loses_stability_at_a_neimark_sacker_point(tmp_path):
+    """The 3-1 orbit (A+ B- A+) of the 12-state towers model, continued up in T/T_Ax,
+    loses stability when a complex pair of multipliers leaves the unit circle; the
+    brute-force sweep (200 transient cycles, full classification) shows 3-1 up to
+    0.740 and a period-5 response (14 impacts, frequency locking on the torus born
+    there) at 0.745."""
+    path = tmp_path / "ns.h5"
+    assert main(["sweep", "--preset", "fig3a", "--param", "period_ratio=0.73:0.75:0.005",
+                 "--continuation", "forward", "--transient", "200", "--classify", "full",
+                 "-o", str(path), "--quiet"]) == 0
+    sweep = open_sweep(path)
+    grid = sweep.grid["period_ratio"]
+    three_one = [int(sweep.array("impacts_per_period", "forward")[i]) == 3
+                 and int(sweep.array("period_cycles", "forward")[i]) == 1
+                 for i in range(len(grid))]
+    last = max(i for i, ok in enumerate(three_one) if ok)
+    assert all(three_one[:last + 1]) and last + 1 < len(grid)
+    assert sweep.array("period_cycles", "forward")[last + 1] != 1
+    smap = StroboscopicMap.of(FIG3A, parameter="period_ratio")
+    branch = continue_branch(smap, "period_ratio", 0.735, 0.745, both=False, max_steps=60)
+    ns = branch.of_kind("neimark-sacker")[0]
+    assert grid[last] < ns.value < grid[last + 1] and ns.bracket < 1e-8
+    pair = ns.orbit.multipliers[:2]
+    np.testing.assert_allclose(np.abs(pair), 1.0, atol=1e-6)
+    assert abs(pair[0].imag) > 0.5 and pair[0] == np.conj(pair[1])
+    assert ns.orbit.label == "3-1" and ns.orbit.corners == ("A+", "B-", "A+")
+    before = branch.orbits[:ns.index]  # the points before it along the curve
+    assert len(before) > 3 and all(o.stable for o in before)
+    for offset, stable in ((-1e-5, True), (1e-5, False)):  # the same orbit on both sides
+        near = find_orbit(smap.with_parameter(value=ns.value + offset),
+                          initial_state=ns.orbit.state)
+        assert near.stable == stable and near.label == "3-1"
+        assert abs(near.multipliers[0].imag) > 0.5
+    # the torus rotates by arg(mu) / 2 pi = 0.217 per cycle, near the 1:5 locking seen
+    assert abs(np.angle(pair[0]) / (2 * np.pi) - 1 / 5) < 0.03
