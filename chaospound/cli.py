@@ -2110,6 +2110,9 @@ def _plot_branch_file(args: argparse.Namespace) -> int:
     from chaospound.plot import plot_branches, plot_multipliers, save
     from chaospound.store import open_sweep
 
+    if args.orbit is not None:
+        raise CliError("--orbit draws a sweep file's orbit diagram; a branch file's diagram "
+                       "has the impact velocities (or the first state) of every orbit")
     data = open_branches(args.sweep_file)
     output = args.output or os.path.splitext(args.sweep_file)[0] + ".png"
     if os.path.abspath(output) == os.path.abspath(args.sweep_file):
