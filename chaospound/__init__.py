@@ -29,6 +29,9 @@ _OTHER_EXPORTS = {
     "lyapunov_spectrum": "chaospound.dynamics.lyapunov",
     "classify": "chaospound.dynamics.classify",
     "custom_system": "chaospound.dynamics.system",
+    "find_orbit": "chaospound.orbits.shooting",
+    "continue_branch": "chaospound.orbits.continuation",
+    "open_branches": "chaospound.orbits.store",
 }
 
 __all__ = ["__version__", *_SCENE_EXPORTS, *_OTHER_EXPORTS]

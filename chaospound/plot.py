@@ -44,6 +44,8 @@ __all__ = [
     "plot_hysteresis",
     "phase_panels",
     "plot_bifurcation",
+    "plot_branches",
+    "plot_multipliers",
     "plot_exponent_map",
     "plot_impact_map",
     "plot_lyapunov_convergence",
@@ -952,6 +954,134 @@ def save(fig: Figure, path: str | os.PathLike[str], *, dpi: int = 150) -> None:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(temporary)
         raise
+
+
+# ======================================================= continued branches
+#: marker of each kind of special point on a continued branch (chaospound.orbits)
+SPECIAL_MARKERS = {"fold": ("o", "k"), "period-doubling": ("s", "C3"),
+                   "neimark-sacker": ("D", "C1"), "grazing": ("^", "C2"),
+                   "corner-change": ("v", "C4")}
+
+
+def _runs(stable: np.ndarray, impacts: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of the runs of equal (stability, impacts per period), stops exclusive.
+
+    A run is extended by one point into the next when only the stability changes, so
+    that solid and dashed parts join; where the impacts per period change (a grazing)
+    the curves are cut, since the impacts' order differs on the two sides.
+    """
+    key = stable.astype(np.int64) + 2 * impacts.astype(np.int64)
+    edges = [0, *(np.nonzero(key[1:] != key[:-1])[0] + 1), key.size]
+    runs = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        joined = b < key.size and impacts[b] == impacts[b - 1]
+        runs.append((a, b + 1 if joined else b))
+    return runs
+
+
+def plot_branches(branches, ax: Axes | None = None, *, over=None,
+                  parameter_label_text: str | None = None) -> Figure:
+    """Bifurcation diagram of continued branches: impact velocities against the parameter.
+
+    Every impact of a period (k forcing cycles) is one curve: stable parts
+    solid, unstable parts dashed; special points (fold, period doubling,
+    Neimark-Sacker, grazing, corner change) marked. A branch without impacts
+    draws the first state component at the section instead (right axis label
+    says so). Optionally over a brute-force sweep's impact velocities (grey).
+
+    Parameters
+    ----------
+    branches : sequence of chaospound.orbits.continuation.Branch
+    ax : Axes, optional
+    over : chaospound.store.SweepFile, optional
+        A sweep of the same parameter, drawn underneath (every branch of it).
+    parameter_label_text : str, optional
+        x label (default: the parameter's symbol).
+
+    Returns
+    -------
+    Figure
+    """
+    fig, ax = _single_axes(ax)
+    name = branches[0].parameter if branches else ""
+    if over is not None:
+        grid = over.grid[over.parameters[0]]
+        for b, marker in zip(over.branches, ("o", ">", "<"), strict=False):
+            vel = over.impact_velocities(b)
+            counts = np.array([v.size for v in vel])
+            if counts.sum():
+                ax.scatter(np.repeat(grid, counts), np.concatenate(vel), s=8, marker=marker,
+                           color="0.6", alpha=0.6, linewidths=0, zorder=1,
+                           label=f"sweep ({b})")
+    any_impacts = any(int(o.impacts_per_period) for br in branches for o in br.orbits)
+    for number, br in enumerate(branches):
+        color = f"C{number % 10}"
+        lam = br.values
+        stable = br.stable
+        if any_impacts:
+            width = max(int(o.impacts_per_period) for o in br.orbits) or 1
+            curves = np.full((len(br), width), np.nan)
+            for i, o in enumerate(br.orbits):
+                curves[i, :o.impacts_per_period] = o.impact_velocity
+        else:
+            curves = br.states[:, :1]
+        labelled = False
+        for a, b in _runs(stable, br.impacts_per_period):
+            style = "-" if stable[a] else "--"
+            for c in range(curves.shape[1]):
+                label = None
+                if not labelled:
+                    label = f"{br.name or f'period-{br.period}'}"
+                    labelled = True
+                ax.plot(lam[a:b], curves[a:b, c], ls=style, color=color, lw=1.2, zorder=2,
+                        label=label)
+        for sp in br.special:
+            marker, mcolor = SPECIAL_MARKERS.get(sp.kind, ("x", "k"))
+            ys = (sp.orbit.impact_velocity if any_impacts else sp.orbit.state[:1])
+            ys = ys if np.size(ys) else np.zeros(1)
+            ax.scatter(np.full(np.size(ys), sp.value), ys, marker=marker, s=36,
+                       facecolors="none", edgecolors=mcolor, linewidths=1.3, zorder=3)
+    for kind, (marker, mcolor) in SPECIAL_MARKERS.items():
+        if any(sp.kind == kind for br in branches for sp in br.special):
+            ax.scatter([], [], marker=marker, s=36, facecolors="none", edgecolors=mcolor,
+                       label=kind)
+    ax.plot([], [], "k-", lw=1.2, label="stable")
+    ax.plot([], [], "k--", lw=1.2, label="unstable")
+    ax.set_xlabel(parameter_label_text or parameter_label(name))
+    if any_impacts:
+        ax.set_ylabel(VELOCITY_LABEL)
+    else:
+        first = branches[0].orbits[0].state_names[0] if branches else "x"
+        ax.set_ylabel(f"{axis_label(first)} at the section")
+    ax.legend(fontsize="small", frameon=False)
+    ax.set_label("branches")
+    return fig
+
+
+def plot_multipliers(branches, ax: Axes | None = None) -> Figure:
+    """Floquet multipliers along continued branches in the complex plane, with the unit
+    circle; colour runs along each branch (parameter), special points ringed."""
+    fig, ax = _single_axes(ax)
+    theta = np.linspace(0.0, 2.0 * np.pi, 361)
+    ax.plot(np.cos(theta), np.sin(theta), color="k", lw=0.8, label="unit circle")
+    for br in branches:
+        mu = br.multipliers
+        lam = np.repeat(br.values, mu.shape[1])
+        points = ax.scatter(mu.real.ravel(), mu.imag.ravel(), c=lam, s=6, cmap="viridis",
+                            linewidths=0)
+        for sp in br.special:
+            marker, mcolor = SPECIAL_MARKERS.get(sp.kind, ("x", "k"))
+            m = sp.orbit.multipliers
+            ax.scatter(m.real, m.imag, marker=marker, s=36, facecolors="none",
+                       edgecolors=mcolor, linewidths=1.2)
+    if branches:
+        fig.colorbar(points, ax=ax, label=parameter_label(branches[0].parameter))
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(r"Re $\mu$")
+    ax.set_ylabel(r"Im $\mu$")
+    ax.set_title("Floquet multipliers")
+    ax.set_label("multipliers")
+    return fig
 
 
 # ================================================================= helpers
