@@ -1,4 +1,4 @@
-"""Event location on a step's interpolant (chaospound.kernels.events).
+"""Event location on a step's interpolant (the templates of chaospound.engine.events, composed).
 
 The root finder of the contact events refines roots of the end penetrations
 by Newton's method, using the interpolated penetration *rate* as the

@@ -8,13 +8,13 @@ Python exception path; a zero divisor gives inf or NaN, which the
 integrators report as a non-finite state).
 
 ``inline`` is ``kernel`` plus LLVM's always-inline: the model bodies, the
-contact geometry and the ground motion, which then compile into one flat
-right-hand side (:func:`chaospound.kernels.models.rhs_grounded`) instead of a
+contact law and the ground motion, which then compile into one flat
+right-hand side (``rhs_plain`` of :mod:`chaospound.engine.glue`) instead of a
 chain of calls that each pass three arrays field by field.
 
-``driver`` compiles the kernels that allocate their own workspaces
-(:func:`chaospound.kernels.integrate.run_cycles`,
-:func:`chaospound.kernels.models.jacobian`) and so need the runtime.
+``driver`` compiles kernels that allocate their own workspaces and so need the
+runtime (the engines do not: :class:`chaospound.engine.compose.Engine`
+allocates in Python).
 
 All three cache their machine code on disk (``__pycache__``, or
 ``NUMBA_CACHE_DIR``; :mod:`.cache` clears that cache when a kernel module

@@ -31,7 +31,7 @@ TOWERS = 3  #: the general 12-state torsional model
 
 LORENZ = 4  #: Lorenz (1963) system, a validation case for the Lyapunov engine
 DUFFING = 5  #: forced Duffing oscillator x'' + d x' + a x + b x^3 = g cos(w t)
-CUSTOM = 6  #: a user's jitted system (kernels.custom builds its integrator)
+CUSTOM = 6  #: a user's jitted system (composed with the model "user")
 TANGENT = 8  #: offset of the tangent (variational) models: id = TANGENT + base id
 
 MODEL_NAMES = ("wall", "tower-wall", "pair", "towers")  #: the pounding models

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..dynamics.system import SimulationError
-from ..kernels.integrate import CORNER_LABELS
+from ..physics.corners import CORNER_LABELS
 from ..scene import Scene
 from .maps import StroboscopicMap, state_scale
 

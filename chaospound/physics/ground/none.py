@@ -1,6 +1,6 @@
 """No ground motion: ``u_g = 0``.
 
-The values are today's ``P_GROUND = 0`` branches of :mod:`chaospound.kernels.powers`:
+The values:
 ``(0, 0)`` from :func:`at` and :func:`at_anchor`, and the carried state ``(0, 1)``
 (the phase of ``sin, cos`` at zero) from :func:`anchor` and :func:`shifted`.
 The block is empty.

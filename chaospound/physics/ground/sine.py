@@ -11,11 +11,11 @@ slot  name            meaning
 ====  ==============  ==========================================================
 
 The y component is ``u_gy = y_ratio sin(t / r + y_phase)``, a bi-directional
-harmonic input as in Gong & Hao (2005). The x functions are today's
-:mod:`chaospound.kernels.powers` bodies (``ground``, ``ground_phase``,
-``phase_shifted``, ``ground_at_phase``) with ``p[P_PERIOD_RATIO]`` read as
-``p[base]`` and the ``P_GROUND`` test removed (the ``none`` module is the other
-branch): their values are bitwise those of ``P_GROUND = 1``.
+harmonic input as in Gong & Hao (2005). The x functions carry the phase
+as ``(sin, cos)`` from step to step (``anchor``, ``shifted``, ``at_anchor``): a
+many-stage step evaluates no library sine (angle addition with a Taylor
+series for small shifts), and the engine resets the anchor from the library
+sine at every section, so the phase never drifts.
 """
 
 from __future__ import annotations
