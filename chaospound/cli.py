@@ -91,7 +91,7 @@ STATUS_DELAY_S = 2.0
 STATUS_INTERVAL_S = 1.0
 #: what a first run's compilation of the kernels takes (s): 20-38 s measured on a fresh
 #: clone, 54 s on two busy cores
-COMPILE_ESTIMATE_S = "30-60"
+COMPILE_ESTIMATE_S = "10-15"
 _COMMAND_START = time.perf_counter()  #: reset by main(): the whole command's start
 
 
@@ -523,7 +523,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         check_figure_path(args.plot)
         if args.output is not None and os.path.abspath(args.plot) == os.path.abspath(args.output):
             raise CliError(f"--plot {_path(args.plot)} is the --output file")
-    _load_kernels(args.quiet)
+    _load_kernels(args.quiet, engine=_engine_of(scene))
     cycles = f"{scene.run.transient} transient + {scene.run.record} recorded cycles"
     with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet) as status:
         sim = _run_simulation(scene, args.trajectory)
@@ -691,7 +691,7 @@ def _scene_for_run(args: argparse.Namespace) -> Scene:
     scene = scene_from_args(args)
     if args.plot is not None:
         check_figure_path(args.plot)
-    _load_kernels(args.quiet)
+    _load_kernels(args.quiet, engine=_engine_of(scene))
     return scene
 
 
@@ -952,7 +952,8 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
         check_figure_path(args.plot)
     # warm the jitted kernels up, so that the reported wall time is the work's
     _load_kernels(args.quiet, lambda: lyapunov_spectrum(
-        system, k=args.k, transient=0, tangent_transient=0, cycles=2, n_blocks=2))
+        system, k=args.k, transient=0, tangent_transient=0, cycles=2, n_blocks=2),
+        engine=system.engine("qr"))
     start = time.perf_counter()
     with _Status(f"Lyapunov exponents: {system.transient} transient + {args.tangent_transient} "
                  f"tangent transient + {args.cycles} averaged cycles", quiet=args.quiet):
@@ -1169,7 +1170,7 @@ def _cmd_classify(args: argparse.Namespace) -> int:
         raise CliError(f"--max-period {args.max_period}: must be an integer >= 1")
     if args.plot is not None:
         check_figure_path(args.plot)
-    _load_kernels(args.quiet)
+    _load_kernels(args.quiet, engine=_engine_of(scene))
     with _Status(f"classifying {scene.name}", quiet=args.quiet) as status:
         regime = classify(
             scene,
@@ -1863,22 +1864,47 @@ class _Status:
             pass
 
 
-def _load_kernels(quiet: bool, warm=None) -> None:
-    """Load the jitted kernels before the work, outside its timing: from numba's disk
-    cache (well under a second), or by compiling them (the first run after installing
-    or editing, about :data:`COMPILE_ESTIMATE_S` s), which is announced at once on a
-    terminal. ``warm`` is the call that loads them (default: one tiny cycle)."""
-    from chaospound.simulate import kernels_cached
+def _load_kernels(quiet: bool, warm=None, engine=None) -> None:
+    """Load the engine of the work before the work, outside its timing: from numba's
+    disk cache (well under a second), or by compiling it (the first run of a
+    composition after installing or editing, about :data:`COMPILE_ESTIMATE_S` s),
+    which is announced at once on a terminal. ``engine`` is the engine the work runs
+    (default: the default scene's); ``warm`` the call that loads it (default: one
+    tiny cycle of ``engine``)."""
+    from chaospound.simulate import warm_up
 
+    if engine is None:
+        from chaospound.engine.compose import engine_for
+        from chaospound.simulate import DEFAULT_COMPOSITION
+
+        engine = engine_for(DEFAULT_COMPOSITION)
     if warm is None:
-        from chaospound.simulate import warm_up as warm
-    cached = kernels_cached()
+        def warm() -> None:
+            warm_up(engine)
+    cached = engine.is_cached()
     if cached is False:
         text, delay = f"compiling kernels, first run only, about {COMPILE_ESTIMATE_S} s", 0.0
     else:
         text, delay = "loading the compiled kernels", None
     with _Status(text, quiet=quiet, delay=delay):
         warm()
+
+
+def _engine_of(scene):
+    """The engine a scene's runs use (its composition's)."""
+    from chaospound.dynamics.system import System
+
+    return System.from_scene(scene).engine()
+
+
+def _orbit_warm(smap):
+    """The call that loads the two engines of orbit work: the map and its monodromy."""
+    def warm() -> None:
+        from chaospound.dynamics.system import advance, monodromy
+
+        advance(smap.system, smap.system.initial_state, 1)
+        monodromy(smap.system, smap.system.initial_state, 1)
+    return warm
 
 
 def _command_seconds() -> float:
@@ -1940,7 +1966,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
 
     scene = scene_from_args(args)
     smap = _orbit_map(args, scene)
-    _load_kernels(args.quiet)
+    _load_kernels(args.quiet, _orbit_warm(smap), smap.system.engine("propagator"))
     start = time.perf_counter()
     with _Status(f"period-{args.period} orbit of {scene.name}: {smap.system.transient} "
                  "transient cycles, then Newton", quiet=args.quiet):
@@ -2047,7 +2073,7 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     check_output_path(args.output, overwrite=args.overwrite)
     scene = scene.with_params(**{name: a})
     smap = _orbit_map(args, scene, parameter=name)
-    _load_kernels(args.quiet)
+    _load_kernels(args.quiet, _orbit_warm(smap), smap.system.engine("propagator"))
     start = time.perf_counter()
     options = {"max_steps": args.max_steps, "tol": args.tol}
     if args.ds_max is not None:
