@@ -1871,7 +1871,7 @@ def _load_kernels(quiet: bool, warm=None, engine=None) -> None:
     which is announced at once on a terminal. ``engine`` is the engine the work runs
     (default: the default scene's); ``warm`` the call that loads it (default: one
     tiny cycle of ``engine``)."""
-    from chaospound.simulate import warm_up
+    from chaospound.simulate import kernels_cached, warm_up
 
     if engine is None:
         from chaospound.engine.compose import engine_for
@@ -1881,7 +1881,7 @@ def _load_kernels(quiet: bool, warm=None, engine=None) -> None:
     if warm is None:
         def warm() -> None:
             warm_up(engine)
-    cached = engine.is_cached()
+    cached = kernels_cached(engine.composition)
     if cached is False:
         text, delay = f"compiling kernels, first run only, about {COMPILE_ESTIMATE_S} s", 0.0
     else:
