@@ -20,6 +20,41 @@ NAME = "hertz"
 PARAMETERS = ("beta", "chi")  #: the law's block, in order
 CONSERVATIVE = True  #: the force has a potential (energy tests apply)
 DISSIPATIVE = False  #: the force depends on the penetration rate
+MEMORY = ()  #: per-episode memory slots after PARAMETERS (none)
+JUMPS = False  #: the force is continuous across onset and release
+SWITCHES = 0  #: no extra event surface while in contact
+
+
+def block(e: float = 1.0, *, beta: float, chi: float = 1.5) -> dict[str, float]:
+    """Block values from the physical inputs (docs/contact_laws.md).
+
+    Parameters
+    ----------
+    e : float
+        Coefficient of restitution; must be 1 (an elastic law: hertzdamp,
+        hunt-crossley and jankowski add damping to this force).
+    beta : float
+        Hertz stiffness per unit length, units of ``K_Ax A_g^(1 - chi)``, > 0.
+    chi : float
+        Hertz exponent, >= 1.
+
+    Returns
+    -------
+    dict
+        ``{"beta": beta, "chi": chi}``.
+    """
+    if e != 1.0:
+        raise ValueError(f"the hertz law is elastic (e = 1); got e = {e}: use hertzdamp, "
+                         "hunt-crossley or jankowski")
+    if not beta > 0.0 or not chi >= 1.0:
+        raise ValueError(f"beta = {beta}, chi = {chi}: need beta > 0 and chi >= 1")
+    return {"beta": float(beta), "chi": float(chi)}
+
+
+@kernel
+def on_onset(p, base, rate):
+    """No memory: nothing to write (the interface of the laws with memory)."""
+    return
 
 
 @inline
