@@ -217,8 +217,8 @@ def restitution_log(e: float) -> float:
     """``-ln e / sqrt(pi^2 + ln^2 e)``, the damping ratio of a linear oscillator whose
     half-cycle ends with the speed ratio e (Anagnostopoulos 1988)."""
     check_restitution(e)
-    le = math.log(e)
-    return -le / math.sqrt(math.pi**2 + le * le)
+    le = abs(math.log(e))  # +0.0 at e = 1 (not -0.0: zero damping is bitwise the parent)
+    return le / math.sqrt(math.pi**2 + le * le)
 
 
 def check_restitution(e: float) -> None:
