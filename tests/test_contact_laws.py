@@ -411,9 +411,10 @@ def free_impact(module, p: np.ndarray, m_eff: float, v0: float, method: str = "D
 
     Returns
     -------
-    (e, duration, peak_force) : tuple of float
+    (e, duration, peak_force, least_force) : tuple of float
         The measured coefficient of restitution ``-d'_end / v0``, the contact
-        duration (units of 1 / omega_Ax) and the largest force seen at the steps.
+        duration (units of 1 / omega_Ax), and the largest and the least (most
+        tensile) force at the accepted steps (units of A_g K_Ax).
     """
     module.on_onset(p, BASE, v0)
     force = module.point_force
@@ -430,8 +431,9 @@ def free_impact(module, p: np.ndarray, m_eff: float, v0: float, method: str = "D
                     events=released)
     if sol.status != 1:
         raise RuntimeError(f"no release: {sol.message}")
-    peak = max(abs(force(p, BASE, d, v)) for d, v in sol.y.T)
-    return -sol.y_events[0][0][1] / v0, float(sol.t_events[0][0]), peak
+    forces = [force(p, BASE, d, v) for d, v in sol.y.T[1:-1]]
+    forces.append(force(p, BASE, 1e-300, sol.y_events[0][0][1]))  # the limit at release
+    return -sol.y_events[0][0][1] / v0, float(sol.t_events[0][0]), max(forces), min(forces)
 
 
 #: measured e must lie within these bands around the target (docs/contact_laws.md):
@@ -469,7 +471,7 @@ def test_kelvin_voigt_restitution_exact():
     for e in (0.3, 0.5, 0.7, 0.9, 0.99):
         for v0 in (1e-2, 1.0, 1e1):
             p = pack(kelvin_voigt.block(e, k=K_LIN, m_eff=M_EFF))
-            measured, duration, _ = free_impact(kelvin_voigt, p, M_EFF, v0)
+            measured, duration, _, _ = free_impact(kelvin_voigt, p, M_EFF, v0)
             assert abs(measured - e) < 1e-8
             xi = kelvin_voigt.damping_ratio(e)
             expected = math.pi / (math.sqrt(K_LIN / M_EFF) * math.sqrt(1.0 - xi * xi))
