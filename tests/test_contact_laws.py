@@ -396,6 +396,8 @@ def test_point_stiffness_and_rate_match_finite_differences(name):
         assert abs(kr - fd_r) * hr <= 1e-8 * scale + 1e-14 * abs(kr * hr)
         rate = module.point_force_rate(p, BASE, d, r, a)
         assert math.isclose(rate, kd * r + kr * a, rel_tol=1e-12, abs_tol=1e-12 * abs(kd * r))
+        # the models' call without the acceleration: accel = 0
+        assert module.point_force_rate(p, BASE, d, r) == module.point_force_rate(p, BASE, d, r, 0.0)
 
 
 # ---------------------------------------------------------- free impacts

@@ -71,8 +71,8 @@ def point_stiffness(p, base, d, rate):
 
 
 @kernel
-def point_force_rate(p, base, d, rate):
-    """``dF/dt = dF/dd d'`` of a point contact in contact (``d > 0``)."""
+def point_force_rate(p, base, d, rate, accel=0.0):
+    """``dF/dt = dF/dd d'`` of a point contact in contact (``d > 0``); ``accel`` unused."""
     beta = p[base]
     chi = p[base + 1]
     return beta * chi * power(d, chi - 1.0) * rate
@@ -145,8 +145,12 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
 
 
 @kernel
-def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
-    """``dF/dt`` of the resultant: ``F_c (r_lo + r_hi) / 2 + F_s (r_hi - r_lo) / L``."""
+def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo=0.0,
+                    accel_hi=0.0):
+    """``dF/dt`` of the resultant: ``F_c (r_lo + r_hi) / 2 + F_s (r_hi - r_lo) / L``.
+
+    The accelerations (the interface of the dissipative laws) are unused.
+    """
     fc, fs, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length)
     return fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / (2.0 * half_length)
 

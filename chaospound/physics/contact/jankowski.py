@@ -110,7 +110,7 @@ def point_stiffness(p, base, d, rate):
 
 
 @kernel
-def point_force_rate(p, base, d, rate, accel):
+def point_force_rate(p, base, d, rate, accel=0.0):
     """``dF/dt = dF/dd d' + dF/dd' d''`` in contact (``accel`` = d'')."""
     k, c = point_stiffness(p, base, d, rate)
     return k * rate + c * accel
@@ -202,7 +202,8 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
 
 
 @kernel
-def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo, accel_hi):
+def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo=0.0,
+                    accel_hi=0.0):
     """``dF/dt`` from the end rates and accelerations (units of A_g omega_Ax^2)."""
     fc, fs, _, _, frc, frs, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi,
                                                  half_length)

@@ -111,7 +111,7 @@ def point_stiffness(p, base, d, rate):
 
 
 @kernel
-def point_force_rate(p, base, d, rate, accel):
+def point_force_rate(p, base, d, rate, accel=0.0):
     """``dF/dt = k d' + c d''`` in contact (``accel`` = d'', units of A_g omega_Ax^2)."""
     if p[base + 2] != 0.0 and p[base] * d + p[base + 1] * rate < 0.0:
         return 0.0
@@ -256,7 +256,8 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
 
 
 @kernel
-def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo, accel_hi):
+def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo=0.0,
+                    accel_hi=0.0):
     """``dF/dt`` of the resultant from the end rates and accelerations (units of
     A_g omega_Ax^2): ``F_dc r_m + F_sl dr / L + F_rc a_m + F_rs da / L``."""
     fc, fs, _, _, frc, frs, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi,

@@ -57,7 +57,7 @@ def point_stiffness(p, base, d, rate):
 
 
 @kernel
-def point_force_rate(p, base, d, rate, accel):
+def point_force_rate(p, base, d, rate, accel=0.0):
     """``dF/dt = k d'`` in contact (``d > 0``); ``accel`` is unused."""
     return p[base] * rate
 
@@ -118,7 +118,8 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
 
 
 @kernel
-def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo, accel_hi):
+def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo=0.0,
+                    accel_hi=0.0):
     """``dF/dt`` of the resultant: ``F_c r_m + F_s dr / L`` (accelerations unused)."""
     fc, fs, _, _, _, _, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length)
     return fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / (2.0 * half_length)
