@@ -172,6 +172,35 @@ def approach_rate_moments(j, d_lo, d_hi, r_lo, r_hi):
     return _piece(j, d_lo, d_hi, r_lo, r_hi, 0.0, s_star)
 
 
+@inline
+def approach_rate_force(j, d_lo, d_hi, r_lo, r_hi):
+    """``(I0, I1)`` of :func:`approach_rate_moments` without the third moment
+    (what the force needs: ``I1`` uses M2 at most)."""
+    if r_lo > 0.0 and r_hi > 0.0:
+        return rate_moments(j, d_lo, d_hi, r_lo, r_hi)
+    if r_hi > 0.0:
+        s_a = r_lo / (r_lo - r_hi)
+        s_b = 1.0
+    else:
+        s_a = 0.0
+        s_b = r_lo / (r_lo - r_hi)
+    length = s_b - s_a
+    d_a = d_lo + (d_hi - d_lo) * s_a
+    d_b = d_lo + (d_hi - d_lo) * s_b
+    if length <= 0.0 or (d_a <= 0.0 and d_b <= 0.0):
+        return 0.0, 0.0
+    c = 0.5 * (s_a + s_b) - 0.5
+    p0, p1, p2 = moments(j, d_a, d_b)
+    q0 = length * p0
+    q1 = length * (c * p0 + length * p1)
+    q2 = length * (c * c * p0 + 2.0 * c * length * p1 + length * length * p2)
+    r_a = r_lo + (r_hi - r_lo) * s_a
+    r_b = r_lo + (r_hi - r_lo) * s_b
+    slope = (r_b - r_a) / length
+    r_mid = 0.5 * (r_a + r_b) - slope * c
+    return r_mid * q0 + slope * q1, r_mid * q1 + slope * q2
+
+
 # ------------------------------------------------------- physical definitions
 
 

@@ -33,7 +33,11 @@ from __future__ import annotations
 import math
 
 from chaospound.kernels.jit import inline, kernel
-from chaospound.physics.contact.dissipation import approach_rate_moments, check_restitution
+from chaospound.physics.contact.dissipation import (
+    approach_rate_force,
+    approach_rate_moments,
+    check_restitution,
+)
 from chaospound.physics.contact.moments import moments
 from chaospound.physics.powers import power
 
@@ -162,7 +166,7 @@ def line_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
     r_lo = rate_c - rate_slope * half_length
     r_hi = rate_c + rate_slope * half_length
     if r_lo > 0.0 or r_hi > 0.0:
-        _, _, _, i0, i1, _ = approach_rate_moments(0.5 * (chi - 1.0), d_lo, d_hi, r_lo, r_hi)
+        i0, i1 = approach_rate_force(0.5 * (chi - 1.0), d_lo, d_hi, r_lo, r_hi)
         force += c_s * i0
         moment += c_s * 2.0 * half_length * i1
     return force, moment, d_lo, d_hi
