@@ -143,6 +143,9 @@ def test_zero_damping_blocks():
             kelvin_voigt.block(bad, k=1.0, m_eff=1.0)
     with pytest.raises(ValueError):
         hertzdamp.block(0.5, beta=1.0, variant="nope")
+    # OpenSees' xiNorm = zeta / beta: Ye's recommended value gives Ye's block
+    ye = hertzdamp.block(0.6, beta=BETA, variant="ye")
+    assert hertzdamp.block(0.6, beta=BETA, xi_norm=8 * 0.4 / (5 * 0.6)) == pytest.approx(ye)
     with pytest.raises(ValueError):
         linear_law.block(0.5, k=1.0)
 

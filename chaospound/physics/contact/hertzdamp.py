@@ -13,6 +13,9 @@ choices of ``zeta`` (the ``variant`` of :func:`block`):
   any e; it underestimates e slightly at low e.
 
 :mod:`.hunt_crossley` is this law with ``zeta = 3 beta (1 - e) / 2``.
+OpenSees' ``uniaxialMaterial Hertzdamp $Kh $xiNorm $gap <$n>`` is this law with
+``xiNorm = zeta / beta`` (its manual recommends Ye's ``8 (1 - e) / (5 e)``);
+:func:`block` takes ``xi_norm`` to set it directly.
 docs/contact_laws.md gives the measured e of each against its target.
 
 Units (docs/model.md section 2): d in A_g, r in A_g omega_Ax, beta in
@@ -65,7 +68,8 @@ def damping_numerator(e: float, beta: float, variant: str = "lankarani-nikravesh
 
 
 def block(e: float, *, beta: float, chi: float = 1.5, variant: str = "lankarani-nikravesh",
-          v0_floor: float = V0_FLOOR, v0_initial: float = 1.0) -> dict[str, float]:
+          v0_floor: float = V0_FLOOR, v0_initial: float = 1.0,
+          xi_norm: float | None = None) -> dict[str, float]:
     """Block values (parameters and initial memory) from the physical inputs.
 
     Parameters
@@ -83,12 +87,20 @@ def block(e: float, *, beta: float, chi: float = 1.5, variant: str = "lankarani-
     v0_initial : float
         Memory before the first onset (a run that starts in contact), units of
         A_g omega_Ax; the ground velocity's scale by default.
+    xi_norm : float or None
+        OpenSees' normalised damping ``zeta / beta`` (dimensionless, >= 0);
+        given, it replaces the variant's formula (e is then only checked).
 
     Returns
     -------
     dict
         ``beta, chi, zeta, v0_floor`` and the memory ``v0, xi``.
     """
+    if xi_norm is not None:
+        check_restitution(e)
+        if not xi_norm >= 0.0:
+            raise ValueError(f"xi_norm = {xi_norm}: need >= 0")
+        return _block(xi_norm * beta, beta, chi, v0_floor, v0_initial)
     return _block(damping_numerator(e, beta, variant), beta, chi, v0_floor, v0_initial)
 
 
