@@ -163,6 +163,11 @@ def test_interface_names():
                                      "CONSERVATIVE", "DISSIPATIVE", "JUMPS"):
             assert hasattr(module, attr), (name, attr)
         assert module.DISSIPATIVE != module.CONSERVATIVE
+    # block() lists the block's slots in order: PARAMETERS, then MEMORY
+    blocks = [(hertz, hertz.block(beta=BETA)), (linear_law, linear_law.block(k=K_LIN))]
+    blocks += [(module, make(0.5)) for module, make in DAMPED.values()]
+    for module, values in blocks:
+        assert tuple(values) == module.PARAMETERS + module.MEMORY, module.NAME
 
 
 def test_onset_memory_and_floor():
