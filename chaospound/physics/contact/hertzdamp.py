@@ -23,8 +23,10 @@ Units (docs/model.md section 2): d in A_g, r in A_g omega_Ax, beta in
 ``K_Ax A_g^(1 - chi) / (A_g omega_Ax)``.
 
 The force is continuous (0 at d = 0, whatever the rate): ``JUMPS = False``. It
-can turn tensile only if ``r < -v0 beta / zeta``, which a free impact with
-e >= 0.3 never reaches (the separating rate stays below e v0 in size).
+can turn tensile only if ``r < -v0 beta / zeta``; in a free impact the
+separating rate grows to the final ``e_measured v0``, which stays below that
+bound for e >= 0.3 (narrowly for Ye's form at e = 0.3: 0.256 v0 against
+0.268 v0; below it Ye's form pulls at the end of the contact).
 
 v0 on a line contact: the closing velocity ``d'`` at the end that touches
 first (the onset's contact point, the model's ``model_contact_point``; the
