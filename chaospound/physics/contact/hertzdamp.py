@@ -24,9 +24,10 @@ Units (docs/model.md section 2): d in A_g, r in A_g omega_Ax, beta in
 
 The force is continuous (0 at d = 0, whatever the rate): ``JUMPS = False``. It
 can turn tensile only if ``r < -v0 beta / zeta``; in a free impact the
-separating rate grows to the final ``e_measured v0``, which stays below that
-bound for e >= 0.3 (narrowly for Ye's form at e = 0.3: 0.256 v0 against
-0.268 v0; below it Ye's form pulls at the end of the contact).
+force vanishes as the rate approaches that bound, so the separating rate
+cannot cross it and the law never pulls (with other forces acting it could).
+At low e, Ye's bound ``5 e v0 / (8 (1 - e))`` is what limits the measured e
+(0.0694 at e = 0.1, equal to the bound to 3e-6).
 
 v0 on a line contact: the closing velocity ``d'`` at the end that touches
 first (the onset's contact point, the model's ``model_contact_point``; the
