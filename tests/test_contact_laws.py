@@ -634,3 +634,22 @@ def test_energy_balance_line_contact(name):
     worst, energies = bar_run(name, 0.8, 8)
     assert worst < 1e-8
     assert energies[-1] < 0.9 * energies[0]
+
+
+@pytest.mark.parametrize("name", list(DAMPED))
+def test_uniform_line_is_the_point_law(name):
+    """Parallel faces moving together (no slope, no rate slope): the line resultant is
+    the point force, the moment 0, and the line Jacobian the point stiffness (1e-14)."""
+    rng = np.random.default_rng(3)
+    module, p = law_p(name, 0.45, v0=0.7)
+    for _ in range(40):
+        d = 10.0 ** rng.uniform(-6, 0)
+        r = rng.choice([-1, 1]) * 10.0 ** rng.uniform(-3, 1)
+        force, moment, d_lo, d_hi = module.line_force(p, BASE, d, 0.0, r, 0.0, HALF)
+        point = module.point_force(p, BASE, d, r)
+        scale = K_LIN * d + BETA * d**1.5 + abs(r)
+        assert abs(force - point) <= 1e-14 * scale and moment == 0.0
+        grad = module.line_gradient(p, BASE, d_lo, d_hi, r, r, HALF)
+        kd, kr = module.point_stiffness(p, BASE, d, r)
+        assert math.isclose(grad[0], kd, rel_tol=1e-14, abs_tol=1e-14 * abs(kd) + 1e-300)
+        assert math.isclose(grad[4], kr, rel_tol=1e-14, abs_tol=1e-300)
