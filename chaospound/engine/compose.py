@@ -68,6 +68,11 @@ MODELS = {
 #: the contact laws: name -> module (one registration line each)
 LAWS = {
     "hertz": "chaospound.physics.contact.hertz",
+    "linear": "chaospound.physics.contact.linear",
+    "kelvin-voigt": "chaospound.physics.contact.kelvin_voigt",
+    "hertzdamp": "chaospound.physics.contact.hertzdamp",
+    "hunt-crossley": "chaospound.physics.contact.hunt_crossley",
+    "jankowski": "chaospound.physics.contact.jankowski",
 }
 #: the ground motions: name -> module (one registration line each)
 GROUNDS = {

@@ -20,6 +20,41 @@ NAME = "hertz"
 PARAMETERS = ("beta", "chi")  #: the law's block, in order
 CONSERVATIVE = True  #: the force has a potential (energy tests apply)
 DISSIPATIVE = False  #: the force depends on the penetration rate
+MEMORY = ()  #: per-episode memory slots after PARAMETERS (none)
+JUMPS = False  #: the force is continuous across onset and release
+SWITCHES = 0  #: no extra event surface while in contact
+
+
+def block(e: float = 1.0, *, beta: float, chi: float = 1.5) -> dict[str, float]:
+    """Block values from the physical inputs (docs/contact_laws.md).
+
+    Parameters
+    ----------
+    e : float
+        Coefficient of restitution; must be 1 (an elastic law: hertzdamp,
+        hunt-crossley and jankowski add damping to this force).
+    beta : float
+        Hertz stiffness per unit length, units of ``K_Ax A_g^(1 - chi)``, > 0.
+    chi : float
+        Hertz exponent, >= 1.
+
+    Returns
+    -------
+    dict
+        ``{"beta": beta, "chi": chi}``.
+    """
+    if e != 1.0:
+        raise ValueError(f"the hertz law is elastic (e = 1); got e = {e}: use hertzdamp, "
+                         "hunt-crossley or jankowski")
+    if not beta > 0.0 or not chi >= 1.0:
+        raise ValueError(f"beta = {beta}, chi = {chi}: need beta > 0 and chi >= 1")
+    return {"beta": float(beta), "chi": float(chi)}
+
+
+@kernel
+def on_onset(p, base, rate):
+    """No memory: nothing to write (the interface of the laws with memory)."""
+    return
 
 
 @inline
@@ -36,8 +71,8 @@ def point_stiffness(p, base, d, rate):
 
 
 @kernel
-def point_force_rate(p, base, d, rate):
-    """``dF/dt = dF/dd d'`` of a point contact in contact (``d > 0``)."""
+def point_force_rate(p, base, d, rate, accel=0.0):
+    """``dF/dt = dF/dd d'`` of a point contact in contact (``d > 0``); ``accel`` unused."""
     beta = p[base]
     chi = p[base + 1]
     return beta * chi * power(d, chi - 1.0) * rate
@@ -110,8 +145,12 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
 
 
 @kernel
-def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
-    """``dF/dt`` of the resultant: ``F_c (r_lo + r_hi) / 2 + F_s (r_hi - r_lo) / L``."""
+def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo=0.0,
+                    accel_hi=0.0):
+    """``dF/dt`` of the resultant: ``F_c (r_lo + r_hi) / 2 + F_s (r_hi - r_lo) / L``.
+
+    The accelerations (the interface of the dissipative laws) are unused.
+    """
     fc, fs, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length)
     return fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / (2.0 * half_length)
 

@@ -1,0 +1,228 @@
+"""Jankowski's nonlinear viscoelastic contact (Jankowski 2005).
+
+Force per unit length, with ``r = d'`` the local penetration rate::
+
+    f = beta d^chi + c(d) r    while approaching (r > 0)
+    f = beta d^chi             while separating (r <= 0)
+    c(d) = 2 xi sqrt(beta d^(chi - 1) m_eff) = c_s d^q,  q = (chi - 1) / 2,
+    xi = 9 sqrt(5) (1 - e^2) / (2 e (e (9 pi - 16) + 16))
+
+with the paper's ``chi = 3/2`` (q = 1/4); ``c_s = 2 xi sqrt(beta m_eff)`` is the
+block's ``c_scale``. The formula for xi is Jankowski's fit for chi = 3/2; another
+chi is accepted but its e is not calibrated.
+
+The force is continuous: ``c(d) r`` vanishes at the contact edge (d = 0) and
+at the switch (r = 0), so ``JUMPS = False``; its Jacobian jumps across the
+switch ``d' = 0`` (``SWITCHES = 1``: dF/dd' goes from c(d) to 0). A
+continuous vector field with a discontinuous Jacobian has the identity as
+saltation matrix, so the tangent dynamics need no correction there.
+
+Line resultants: the approach part of the line (``r(s) > 0``) is a half-line,
+split at ``s* = r_lo / (r_lo - r_hi)``; on it ``d`` and ``r`` are again linear
+and :func:`.dissipation.approach_rate_moments` rescales the piece's moments.
+The Jacobian's d-derivative of the damping uses the exponent ``q - 1 = -3/4``
+(an integrable singularity at the contact edge, where the moments stay finite).
+
+Units (docs/model.md section 2): d in A_g, r in A_g omega_Ax, beta in
+``K_Ax A_g^(1 - chi)``, m_eff in m_A; ``c(d) = c_s d^q`` is a damping
+coefficient in K_Ax / omega_Ax, so c_s is in ``K_Ax / (omega_Ax A_g^q)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from chaospound.kernels.jit import inline, kernel
+from chaospound.physics.contact.dissipation import (
+    approach_rate_force,
+    approach_rate_moments,
+    check_restitution,
+)
+from chaospound.physics.contact.moments import moments
+from chaospound.physics.powers import power
+
+NAME = "jankowski"
+PARAMETERS = ("beta", "chi", "c_scale")  #: the law's block, in order
+MEMORY = ()  #: no per-episode memory
+CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part's
+DISSIPATIVE = True  #: the force depends on the penetration rate
+JUMPS = False  #: continuous force; its Jacobian jumps at d' = 0
+SWITCHES = 1  #: the surface d' = 0 while in contact (approach -> restitution)
+
+
+def damping_ratio(e: float) -> float:
+    """Jankowski's ``xi = 9 sqrt(5) (1 - e^2) / (2 e (e (9 pi - 16) + 16))``, 0 for e = 1."""
+    check_restitution(e)
+    return 9.0 * math.sqrt(5.0) * (1.0 - e * e) / (2.0 * e * (e * (9.0 * math.pi - 16.0) + 16.0))
+
+
+def block(e: float, *, beta: float, m_eff: float, chi: float = 1.5) -> dict[str, float]:
+    """Block values from the physical inputs.
+
+    Parameters
+    ----------
+    e : float
+        Target coefficient of restitution, 0 < e <= 1 (e = 1: Hertz).
+    beta : float
+        Hertz stiffness, units of ``K_Ax A_g^(1 - chi)``, > 0.
+    m_eff : float
+        Effective mass of the pair, units of m_A (:func:`.dissipation.effective_mass`).
+    chi : float
+        Hertz exponent; the paper's 1.5 (the xi formula is calibrated for it).
+
+    Returns
+    -------
+    dict
+        ``{"beta", "chi", "c_scale": 2 xi sqrt(beta m_eff)}``.
+    """
+    if not beta > 0.0 or not m_eff > 0.0 or not chi >= 1.0:
+        raise ValueError(f"beta = {beta}, m_eff = {m_eff}, chi = {chi}: need > 0, > 0, >= 1")
+    c_scale = 2.0 * damping_ratio(e) * math.sqrt(beta * m_eff)
+    return {"beta": float(beta), "chi": float(chi), "c_scale": float(c_scale)}
+
+
+@kernel
+def on_onset(p, base, rate):
+    """No memory: nothing to write."""
+    return
+
+
+@inline
+def point_force(p, base, d, rate):
+    """``beta d^chi + c_s d^q d'`` approaching, ``beta d^chi`` separating; 0 for d <= 0."""
+    if d <= 0.0:
+        return 0.0
+    chi = p[base + 1]
+    f = p[base] * power(d, chi)
+    if rate > 0.0:
+        f += p[base + 2] * power(d, 0.5 * (chi - 1.0)) * rate
+    return f
+
+
+@inline
+def point_stiffness(p, base, d, rate):
+    """``(dF/dd, dF/drate)`` of :func:`point_force` (one-sided at d' = 0: separating)."""
+    if d <= 0.0:
+        return 0.0, 0.0
+    chi = p[base + 1]
+    k = p[base] * chi * power(d, chi - 1.0)
+    if rate > 0.0:
+        q = 0.5 * (chi - 1.0)
+        c = p[base + 2] * power(d, q)
+        return k + q * c / d * rate, c
+    return k, 0.0
+
+
+@kernel
+def point_force_rate(p, base, d, rate, accel=0.0):
+    """``dF/dt = dF/dd d' + dF/dd' d''`` in contact (``accel`` = d'')."""
+    k, c = point_stiffness(p, base, d, rate)
+    return k * rate + c * accel
+
+
+@kernel
+def point_potential(p, base, d):
+    """Potential of the elastic part, ``beta d+^(chi + 1) / (chi + 1)``."""
+    if d <= 0.0:
+        return 0.0
+    beta = p[base]
+    chi = p[base + 1]
+    return beta * power(d, chi + 1.0) / (chi + 1.0)
+
+
+@inline
+def line_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
+    """Resultant force and first moment of the line contact.
+
+    Parameters
+    ----------
+    p : ndarray
+        Packed parameters; block ``(beta, chi, c_scale)``.
+    base : int
+        First slot of the law's block.
+    d_c, slope : float
+        Centre penetration (units of A_g) and ``dd/dy`` (radians).
+    rate_c, rate_slope : float
+        Their time derivatives (units of A_g omega_Ax, omega_Ax).
+    half_length : float
+        L / 2 (units of A_g).
+
+    Returns
+    -------
+    (force, moment, d_lo, d_hi) : tuple of float
+        ``(1/L) int f dy`` (units of A_g K_Ax), ``(1/L) int f (y - y_c) dy``
+        (units of A_g^2 K_Ax) and the end penetrations.
+    """
+    beta = p[base]
+    chi = p[base + 1]
+    c_s = p[base + 2]
+    d_lo = d_c - slope * half_length
+    d_hi = d_c + slope * half_length
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0, 0.0, d_lo, d_hi
+    m0, m1, _ = moments(chi, d_lo, d_hi)
+    force = beta * m0
+    moment = beta * 2.0 * half_length * m1
+    r_lo = rate_c - rate_slope * half_length
+    r_hi = rate_c + rate_slope * half_length
+    if r_lo > 0.0 or r_hi > 0.0:
+        i0, i1 = approach_rate_force(0.5 * (chi - 1.0), d_lo, d_hi, r_lo, r_hi)
+        force += c_s * i0
+        moment += c_s * 2.0 * half_length * i1
+    return force, moment, d_lo, d_hi
+
+
+@kernel
+def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
+    """Derivatives of (force, moment) of :func:`line_force`.
+
+    Returns
+    -------
+    tuple of 8 float
+        ``(F_dc, F_sl, M_dc, M_sl, F_rc, F_rs, M_rc, M_rs)`` with respect to the
+        centre penetration, the slope, the centre rate and the rate's slope
+        (one-sided where the rate vanishes: separating).
+    """
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    beta = p[base]
+    chi = p[base + 1]
+    c_s = p[base + 2]
+    q = 0.5 * (chi - 1.0)
+    n0, n1, n2 = moments(chi - 1.0, d_lo, d_hi)
+    length = 2.0 * half_length
+    scale = beta * chi
+    f_dc = scale * n0
+    f_sl = scale * length * n1
+    m_sl = scale * length * length * n2
+    if rate_lo <= 0.0 and rate_hi <= 0.0:
+        return f_dc, f_sl, f_sl, m_sl, 0.0, 0.0, 0.0, 0.0
+    _, _, _, j0, j1, j2 = approach_rate_moments(q - 1.0, d_lo, d_hi, rate_lo, rate_hi)
+    a0, a1, a2, _, _, _ = approach_rate_moments(q, d_lo, d_hi, rate_lo, rate_hi)
+    damp = c_s * q
+    f_sl += damp * length * j1
+    return (f_dc + damp * j0, f_sl, f_sl, m_sl + damp * length * length * j2,
+            c_s * a0, c_s * length * a1, c_s * length * a1, c_s * length * length * a2)
+
+
+@kernel
+def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo=0.0,
+                    accel_hi=0.0):
+    """``dF/dt`` from the end rates and accelerations (units of A_g omega_Ax^2)."""
+    fc, fs, _, _, frc, frs, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi,
+                                                 half_length)
+    length = 2.0 * half_length
+    return (fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / length
+            + frc * 0.5 * (accel_lo + accel_hi) + frs * (accel_hi - accel_lo) / length)
+
+
+@kernel
+def line_potential(p, base, d_lo, d_hi):
+    """Potential of the elastic part, ``beta / (L (chi + 1)) int d+^(chi+1) dy``."""
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0
+    beta = p[base]
+    chi = p[base + 1]
+    m0, _, _ = moments(chi + 1.0, d_lo, d_hi)
+    return beta * m0 / (chi + 1.0)
+

@@ -1,0 +1,276 @@
+"""Kelvin-Voigt contact, ``F = k d + c d'`` (Anagnostopoulos 1988).
+
+Force per unit length ``f(d, r) = k d + c r`` where ``d > 0`` (``r = d'`` the
+local penetration rate), 0 elsewhere, with
+
+    c = 2 xi sqrt(k m_eff),   xi = -ln e / sqrt(pi^2 + ln^2 e)
+
+so that a free impact of two bodies of effective mass ``m_eff`` ends with the
+speed ratio e exactly (the half-cycle of a damped linear oscillator; checked to
+1e-8 in tests/test_contact_laws.py).
+
+Units (dimensionless model, docs/model.md section 2): d in A_g, r in A_g
+omega_Ax, k in K_Ax, c in K_Ax / omega_Ax, m_eff in m_A (from
+:func:`.dissipation.effective_mass`).
+
+Two variants, by the block's ``no_pull`` flag:
+
+* ``no_pull = 0`` (**default**), the law as Anagnostopoulos wrote it: near the
+  end of the restitution phase ``k d + c d' < 0`` and the law pulls the bodies
+  together (a small tensile force; the force jumps from ``c d'`` to 0 when d
+  reaches 0). It is the default because it is the law every xi(e) formula of
+  the literature is derived for: the measured e equals the target exactly, and
+  the law is linear (smooth) inside the contact, so the Jacobians and tangent
+  dynamics have no extra switch.
+* ``no_pull = 1``: ``f = max(k d + c d', 0)``, the usual fix "contact ends when
+  F reaches 0", written pointwise and memoryless (for a free impact the two
+  readings coincide; the pointwise form re-engages continuously if the rate
+  reverses while the faces still overlap). No tensile force, but the measured e
+  exceeds the target (docs/contact_laws.md gives the numbers).
+
+The force jumps at onset (``c v0``), hence ``JUMPS = True``. On a line contact
+the penetrated part and, with ``no_pull``, the part where ``k d + c r > 0`` are
+both half-lines in y (d and r are linear), so the resultants are closed forms:
+the plain law through the moments of :mod:`.moments` with j = 1 and j = 0
+(``M0(0)`` is the penetrated fraction), the clipped law by integrating the
+linear ``k d + c r`` over the intersection.
+"""
+
+from __future__ import annotations
+
+import math
+
+from chaospound.kernels.jit import inline, kernel
+from chaospound.physics.contact.dissipation import (
+    check_restitution,
+    rate_moments,
+    restitution_log,
+)
+from chaospound.physics.contact.moments import force_moments, moments
+
+NAME = "kelvin-voigt"
+PARAMETERS = ("k", "c", "no_pull")  #: the law's block, in order
+MEMORY = ()  #: no per-episode memory
+CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part's
+DISSIPATIVE = True  #: the force depends on the penetration rate
+JUMPS = True  #: the force jumps at onset (and, plain, at release)
+SWITCHES = 0  #: no_pull adds the surface k d + c d' = 0, continuous in F (no jump)
+
+
+def damping_ratio(e: float) -> float:
+    """``xi = -ln e / sqrt(pi^2 + ln^2 e)`` (dimensionless), 0 for e = 1."""
+    return restitution_log(e)
+
+
+def block(e: float, *, k: float, m_eff: float, no_pull: bool = False) -> dict[str, float]:
+    """Block values from the physical inputs.
+
+    Parameters
+    ----------
+    e : float
+        Target coefficient of restitution, 0 < e <= 1 (e = 1: the linear law).
+    k : float
+        Contact stiffness, units of K_Ax, > 0.
+    m_eff : float
+        Effective mass of the pair, units of m_A (:func:`.dissipation.effective_mass`).
+    no_pull : bool
+        Clip the force at 0 (no tensile force); default False (see the module).
+
+    Returns
+    -------
+    dict
+        ``{"k": k, "c": 2 xi sqrt(k m_eff), "no_pull": 0.0 or 1.0}``, c in units
+        of K_Ax / omega_Ax.
+    """
+    check_restitution(e)
+    if not k > 0.0 or not m_eff > 0.0:
+        raise ValueError(f"k = {k}, m_eff = {m_eff}: need both > 0")
+    c = 2.0 * damping_ratio(e) * math.sqrt(k * m_eff)
+    return {"k": float(k), "c": float(c), "no_pull": 1.0 if no_pull else 0.0}
+
+
+@inline
+def point_force(p, base, d, rate):
+    """Contact force ``k d + c d'`` of a point contact (0 when d <= 0), units of A_g K_Ax."""
+    if d <= 0.0:
+        return 0.0
+    f = p[base] * d + p[base + 1] * rate
+    if p[base + 2] != 0.0 and f < 0.0:
+        return 0.0
+    return f
+
+
+@inline
+def point_stiffness(p, base, d, rate):
+    """``(dF/dd, dF/drate)`` of :func:`point_force` (0 where clipped)."""
+    if d <= 0.0:
+        return 0.0, 0.0
+    if p[base + 2] != 0.0 and p[base] * d + p[base + 1] * rate < 0.0:
+        return 0.0, 0.0
+    return p[base], p[base + 1]
+
+
+@kernel
+def point_force_rate(p, base, d, rate, accel=0.0):
+    """``dF/dt = k d' + c d''`` in contact (``accel`` = d'', units of A_g omega_Ax^2)."""
+    if p[base + 2] != 0.0 and p[base] * d + p[base + 1] * rate < 0.0:
+        return 0.0
+    return p[base] * rate + p[base + 1] * accel
+
+
+@kernel
+def point_potential(p, base, d):
+    """Potential of the elastic part, ``k d+^2 / 2`` (units of A_g^2 K_Ax)."""
+    if d <= 0.0:
+        return 0.0
+    return 0.5 * p[base] * d * d
+
+
+@kernel
+def on_onset(p, base, rate):
+    """No memory: nothing to write."""
+    return
+
+
+@inline
+def _penetrated(d_lo, d_hi):
+    """``(a, b, edge)``: the penetrated interval [a, b] of s in [0, 1] and the
+    position of the contact edge d = 0 inside it (-1.0 when in full contact)."""
+    if d_lo > 0.0 and d_hi > 0.0:
+        return 0.0, 1.0, -1.0
+    s_d = d_lo / (d_lo - d_hi)
+    if d_hi > 0.0:
+        return s_d, 1.0, s_d
+    return 0.0, s_d, s_d
+
+
+@inline
+def _clipped_region(k, c, d_lo, d_hi, r_lo, r_hi):
+    """The part of the line where ``d > 0`` and ``g = k d + c r > 0``.
+
+    Returns ``(a, b, g_a, g_b, edge, pulls)``: the interval, g at its ends, the
+    contact edge's position when it bounds the interval (else -1.0), and whether
+    g < 0 anywhere on the penetrated part (``pulls``: False means the plain
+    formulas apply unchanged).
+    """
+    a, b, edge = _penetrated(d_lo, d_hi)
+    dd = d_hi - d_lo
+    dr = r_hi - r_lo
+    g_a = (k * (d_lo + dd * a) if a != edge else 0.0) + c * (r_lo + dr * a)
+    g_b = (k * (d_lo + dd * b) if b != edge else 0.0) + c * (r_lo + dr * b)
+    if g_a >= 0.0 and g_b >= 0.0:
+        return a, b, g_a, g_b, edge, False
+    if g_a <= 0.0 and g_b <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, -1.0, True
+    s_g = a + (b - a) * (g_a / (g_a - g_b))
+    if g_b > 0.0:
+        return s_g, b, 0.0, g_b, (edge if b == edge else -1.0), True
+    return a, s_g, g_a, 0.0, (edge if a == edge else -1.0), True
+
+
+@inline
+def line_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
+    """Resultant force and first moment of a Kelvin-Voigt line contact.
+
+    Parameters
+    ----------
+    p : ndarray
+        Packed parameters; the block is ``(k, c, no_pull)`` from ``p[base]``.
+    base : int
+        First slot of the law's block.
+    d_c, slope : float
+        Penetration at the centre of the rest overlap (units of A_g) and
+        ``dd/dy`` (radians).
+    rate_c, rate_slope : float
+        Their time derivatives (units of A_g omega_Ax and omega_Ax).
+    half_length : float
+        Half the rest-overlap length L / 2 (units of A_g).
+
+    Returns
+    -------
+    (force, moment, d_lo, d_hi) : tuple of float
+        ``force = (1/L) int f dy`` (units of A_g K_Ax), ``moment = (1/L) int f
+        (y - y_c) dy`` (units of A_g^2 K_Ax) and the end penetrations.
+    """
+    k = p[base]
+    c = p[base + 1]
+    d_lo = d_c - slope * half_length
+    d_hi = d_c + slope * half_length
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0, 0.0, d_lo, d_hi
+    r_lo = rate_c - rate_slope * half_length
+    r_hi = rate_c + rate_slope * half_length
+    if p[base + 2] != 0.0:
+        a, b, g_a, g_b, _, pulls = _clipped_region(k, c, d_lo, d_hi, r_lo, r_hi)
+        if pulls:
+            ell = b - a
+            mean_g = 0.5 * (g_a + g_b)
+            first = ell * (mean_g * (0.5 * (a + b) - 0.5) + (g_b - g_a) * ell / 12.0)
+            return ell * mean_g, 2.0 * half_length * first, d_lo, d_hi
+    m0, m1 = force_moments(1.0, d_lo, d_hi)
+    i0, i1 = rate_moments(0.0, d_lo, d_hi, r_lo, r_hi)
+    length = 2.0 * half_length
+    return k * m0 + c * i0, k * 2.0 * half_length * m1 + c * length * i1, d_lo, d_hi
+
+
+@kernel
+def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
+    """Derivatives of (force, moment) of :func:`line_force`.
+
+    Returns
+    -------
+    tuple of 8 float
+        ``(F_dc, F_sl, M_dc, M_sl, F_rc, F_rs, M_rc, M_rs)`` with respect to the
+        centre penetration, the slope, the centre rate and the rate's slope. The
+        moving contact edge ``s_e`` (where ``f = c r(s_e)`` jumps to 0) adds
+        ``B = c r(s_e) / |d_hi - d_lo|`` to ``F_dc`` and ``L (s_e - 1/2)``,
+        ``L^2 (s_e - 1/2)^2`` times it to ``F_sl = M_dc`` and ``M_sl``.
+    """
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    k = p[base]
+    c = p[base + 1]
+    length = 2.0 * half_length
+    clipped = False
+    if p[base + 2] != 0.0:
+        a, b, _, _, edge, clipped = _clipped_region(k, c, d_lo, d_hi, rate_lo, rate_hi)
+    if clipped:
+        ell = b - a
+        off = 0.5 * (a + b) - 0.5
+        n0 = ell
+        n1 = ell * off
+        n2 = ell * (off * off + ell * ell / 12.0)
+    else:
+        n0, n1, n2 = moments(0.0, d_lo, d_hi)
+        _, _, edge = _penetrated(d_lo, d_hi)
+    bound = 0.0
+    arm = 0.0
+    if edge >= 0.0:
+        bound = c * (rate_lo + (rate_hi - rate_lo) * edge) / abs(d_hi - d_lo)
+        arm = length * (edge - 0.5)
+    f_dc = k * n0 + bound
+    f_sl = k * length * n1 + arm * bound
+    m_sl = k * length * length * n2 + arm * arm * bound
+    return (f_dc, f_sl, f_sl, m_sl, c * n0, c * length * n1, c * length * n1,
+            c * length * length * n2)
+
+
+@kernel
+def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo=0.0,
+                    accel_hi=0.0):
+    """``dF/dt`` of the resultant from the end rates and accelerations (units of
+    A_g omega_Ax^2): ``F_dc r_m + F_sl dr / L + F_rc a_m + F_rs da / L``."""
+    fc, fs, _, _, frc, frs, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi,
+                                                 half_length)
+    length = 2.0 * half_length
+    return (fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / length
+            + frc * 0.5 * (accel_lo + accel_hi) + frs * (accel_hi - accel_lo) / length)
+
+
+@kernel
+def line_potential(p, base, d_lo, d_hi):
+    """Potential of the elastic part, ``k / (2 L) int d+^2 dy`` (units of A_g^2 K_Ax)."""
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0
+    m0, _, _ = moments(2.0, d_lo, d_hi)
+    return 0.5 * p[base] * m0
