@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from chaospound.engine.compose import LAWS
 from chaospound.kernels.params import (
     MODEL_NAMES,
     N_PARAMS,
@@ -110,6 +111,9 @@ PAPER_RTOL = 1e-3  #: Press et al.'s Cash-Karp at 0.1 % error (docs/model.md sec
 MAX_SCENE_BYTES = 128 * 2**20
 
 GROUNDS = ("sine", "none")
+CONTACT_LAWS = tuple(LAWS)  #: the contact laws (chaospound/physics/contact/, one module each)
+DAMPING_VARIANTS = ("lankarani-nikravesh", "ye")  #: hertzdamp's damping formulas
+DEFAULT_RESTITUTION = 0.65  #: concrete on concrete, about 0.5-0.7
 OPPONENTS = ("tower", "wall")
 TORSION_DAMPINGS = ("consistent", "as-printed")
 METHODS = ("dopri5", "cash-karp", "rk4", "dop853")
@@ -203,8 +207,13 @@ _GLOBAL_SPECS: dict[str, _Spec] = {
     "torsion_damping": _Spec(
         "choice", "torsional damping uses Om_ti or, as printed, Om_i", choices=TORSION_DAMPINGS
     ),
-    "beta": _pos("Hertz contact stiffness, F = beta d^chi"),
+    "beta": _pos("Hertz contact stiffness, F = beta d^chi (the linear laws' k)"),
     "chi": _Spec("float", "Hertz contact exponent; the force must be C1", low=1.0),
+    "contact_law": _Spec("choice", "contact law (docs/contact_laws.md)", choices=CONTACT_LAWS),
+    "restitution": _pos("coefficient of restitution e of the dissipative laws, 0 < e <= 1"),
+    "damping_variant": _Spec("choice", "hertzdamp's damping: Lankarani-Nikravesh or Ye et al.",
+                             choices=DAMPING_VARIANTS),
+    "no_pull": _Spec("bool", "kelvin-voigt: no tensile force (contact ends when F reaches 0)"),
 }
 _TOWER_SPECS: dict[str, _Spec] = {
     "length": _pos("plan length along the gap line (y), in units of A_g"),
@@ -257,6 +266,7 @@ _TARGET: dict[str, tuple[str, str]] = {
     },
     "beta": ("contact", "beta"),
     "chi": ("contact", "chi"),
+    **{n: ("contact", n) for n in ("contact_law", "restitution", "damping_variant", "no_pull")},
     **{f"{n}{s}": (f"tower{s}", n) for s in _SUFFIXES for n in _TOWER_SPECS},
     **{n: ("solver", n) for n in _SOLVER_SPECS},
     **{n: ("run", n) for n in _RUN_SPECS},
@@ -583,21 +593,38 @@ class Excitation:
 
 @dataclass(frozen=True)
 class Contact:
-    """Hertz line contact, F = beta d^chi for uniform penetration d.
+    """The contact law along the faces' line contact (docs/contact_laws.md).
 
     Parameters
     ----------
     beta : float
-        Contact stiffness, > 0, in units of k_Ax A_g^(1 - chi).
+        Contact stiffness, > 0: Hertz's beta of F = beta d^chi, in units of
+        k_Ax A_g^(1 - chi); the linear laws' k (chi is then not used).
     chi : float
         Contact exponent, >= 1 (the force is then continuous).
+    contact_law : str
+        One of :data:`CONTACT_LAWS`: "hertz" (elastic, the paper's), "linear",
+        "kelvin-voigt", "hertzdamp", "hunt-crossley", "jankowski".
+    restitution : float
+        Coefficient of restitution e, 0 < e <= 1, from which the dissipative
+        laws' damping follows (not used by the elastic laws).
+    damping_variant : str
+        hertzdamp's formula for its damping: "lankarani-nikravesh" or "ye".
+    no_pull : bool
+        kelvin-voigt: clip the force at 0 (no pulling near separation).
     """
 
     beta: float = DEFAULT_BETA
     chi: float = DEFAULT_CHI
+    contact_law: str = "hertz"
+    restitution: float = DEFAULT_RESTITUTION
+    damping_variant: str = "lankarani-nikravesh"
+    no_pull: bool = False
 
     def __post_init__(self) -> None:
         _check_fields(self, _GLOBAL_SPECS)
+        if not self.restitution <= 1.0:
+            raise SceneError(f"restitution = {self.restitution:g}: must be in (0, 1]")
 
 
 @dataclass(frozen=True)
@@ -794,7 +821,8 @@ class Scene:
         Returns
         -------
         numpy.ndarray
-            Shape (N_PARAMS,); unused entries are 0.
+            Shape (N_PARAMS,) for the Hertz law (unused entries are 0); other
+            laws append their block (:meth:`law_block`).
         """
         if model_id is not None:
             self._check_model(model_id, "model_id")
@@ -816,7 +844,40 @@ class Scene:
         _pack_tower(
             p, TOWER_B, self.tower_B, self.freq_ratio, self.effective_mass_ratio, consistent
         )
+        if self.contact.contact_law != "hertz":  # Hertz's block is (P_BETA, P_CHI)
+            p = np.concatenate((p, self.law_block()))
         return p
+
+    def law_block(self) -> np.ndarray:
+        """The contact law's block of the packed vector: its parameters, then its memory.
+
+        The law module's ``block(e, ...)`` turns the scene's physical inputs into
+        them; it takes what it needs of: ``beta``, ``chi``, ``k`` (= beta),
+        ``m_eff`` (the pair's effective mass in units of m_A: ``1 / (1 + m)``
+        between the towers, 1 against a wall, docs/contact_laws.md), ``variant``
+        and ``no_pull``.
+        """
+        import importlib
+        import inspect
+
+        contact = self.contact
+        module = importlib.import_module(LAWS[contact.contact_law])
+        from chaospound.physics.contact.dissipation import effective_mass
+
+        if self.opponent == "wall":
+            m_eff = effective_mass(1.0)
+        else:
+            m_eff = effective_mass(1.0, self.effective_mass_ratio)
+        offered = {"beta": contact.beta, "chi": contact.chi, "k": contact.beta, "m_eff": m_eff,
+                   "variant": contact.damping_variant, "no_pull": contact.no_pull}
+        accepted = inspect.signature(module.block).parameters
+        try:
+            e = contact.restitution if module.DISSIPATIVE else 1.0  # elastic: e = 1
+            values = module.block(e, **{k: v for k, v in offered.items() if k in accepted})
+        except ValueError as exc:
+            raise SceneError(f"contact law {contact.contact_law}: {exc}") from None
+        return np.array([values[name] for name in module.PARAMETERS + module.MEMORY],
+                        dtype=np.float64)
 
     def initial_vector(self, model_id: int | None = None) -> np.ndarray:
         """Initial state restricted to a model's states.
@@ -1179,13 +1240,17 @@ _TABLES: dict[str, tuple[str, ...]] = {
     "structure": ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping"),
     "tower_A": tuple(_TOWER_SPECS),
     "tower_B": tuple(_TOWER_SPECS),
-    "contact": ("beta", "chi"),
+    "contact": ("beta", "chi", "contact_law", "restitution", "damping_variant", "no_pull"),
     "solver": tuple(_SOLVER_SPECS),
     "run": tuple(_RUN_SPECS),
     "initial": ("state",),
     "sweep": (),  # any flat parameter name
 }
 _TOP_KEYS = ("name", "description")
+
+
+#: the short keys of the [contact] table: law = "hertzdamp", variant = "ye"
+_CONTACT_KEYS = {"law": "contact_law", "variant": "damping_variant"}
 
 
 def _scene_from_tables(data: Mapping[str, object]) -> Scene:
@@ -1202,6 +1267,8 @@ def _scene_from_tables(data: Mapping[str, object]) -> Scene:
         if table in ("initial", "sweep"):
             continue
         for key, value in data.get(table, {}).items():
+            if table == "contact" and key in _CONTACT_KEYS:
+                key = _CONTACT_KEYS[key]
             if key not in keys:
                 raise _unknown(key, keys, f"key in [{table}]:")
             flat[key + table[-2:] if table.startswith("tower") else key] = value
@@ -1226,7 +1293,7 @@ def _toml_document(scene: Scene) -> str:
         "structure": {n: getattr(scene, n) for n in _TABLES["structure"]},
         "tower_A": _tower_table(scene.tower_A),
         "tower_B": _tower_table(scene.tower_B),
-        "contact": _fields(scene.contact),
+        "contact": _contact_table(scene.contact),
         "solver": {k: v for k, v in _fields(scene.solver).items()
                    if not (k == "atol" and scene.solver.atol_is_auto)},
         "run": _fields(scene.run),
@@ -1242,6 +1309,14 @@ def _toml_document(scene: Scene) -> str:
             f"{key} = {_toml_value(value)}" for key, value in entries.items() if value is not None
         ]
     return "\n".join(lines) + "\n"
+
+
+def _contact_table(contact: Contact) -> dict[str, object]:
+    """The [contact] table: beta and chi, and the law's fields unless the default Hertz's."""
+    short = {v: k for k, v in _CONTACT_KEYS.items()}
+    default = Contact(beta=contact.beta, chi=contact.chi)
+    return {short.get(k, k): v for k, v in _fields(contact).items()
+            if k in ("beta", "chi") or contact != default}
 
 
 def _tower_table(tower: Tower) -> dict[str, object]:

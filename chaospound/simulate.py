@@ -218,8 +218,8 @@ class _SceneRun:
                    period=scene.period, t0=scene.run.phase * scene.period,
                    transient=scene.run.transient, record=scene.run.record, name=scene.name,
                    engine=engine_for(Composition(
-                       model=MODEL_NAMES[model_id], ground=scene.excitation.ground,
-                       method=scene.solver.method)),
+                       model=MODEL_NAMES[model_id], law=scene.contact.contact_law,
+                       ground=scene.excitation.ground, method=scene.solver.method)),
                    scene=scene)
 
     @classmethod

@@ -21,7 +21,7 @@ pounding models) and, multiplied by T, per excitation cycle.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -217,16 +217,20 @@ def largest_exponent_two_trajectory(
     system = as_system(system)
     _check_counts(cycles, n_blocks, 0)
     transient = system.transient if transient is None else int(transient)
+    # each trajectory its own packed vector: a contact law's per-episode memory
+    # (the onset velocity of hertzdamp) lives there
+    system = replace(system, params=system.params.copy())
     state = system.initial_state
     if transient > 0:
         state, _, _ = advance(system, state, transient, from_time_zero=True)
+    perturbed = replace(system, params=system.params.copy())
     rng = np.random.default_rng(seed)
     direction = rng.normal(size=state.shape[0])
     other = state + separation * direction / np.linalg.norm(direction)
     logs = np.zeros(cycles)
     for c in range(cycles):
         state, _, _ = advance(system, state, 1)
-        other, _, _ = advance(system, other, 1)
+        other, _, _ = advance(perturbed, other, 1)
         delta = other - state
         norm = float(np.linalg.norm(delta))
         logs[c] = np.log(norm / separation)

@@ -120,6 +120,7 @@ class System:
             transient=scene.run.transient,
             scene=scene,
             ground=scene.excitation.ground,
+            law=scene.contact.contact_law,
         )
 
     @property

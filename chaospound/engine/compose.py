@@ -65,6 +65,7 @@ MODELS = {
     "duffing": "chaospound.physics.models.duffing",
     "user": "chaospound.physics.models.user",
 }
+POINT_MODELS = ("wall", "pair")  #: the models with a point contact (the others: a line)
 #: the contact laws: name -> module (one registration line each)
 LAWS = {
     "hertz": "chaospound.physics.contact.hertz",
@@ -83,7 +84,7 @@ GROUNDS = {
 TEMPLATES = ("chaospound.engine.glue", "chaospound.solvers.steppers",
              "chaospound.engine.events", "chaospound.engine.loop")
 LAW_FUNCTIONS = ("point_force", "point_stiffness", "point_force_rate", "point_potential",
-                 "line_force", "line_gradient", "line_force_rate", "line_potential")
+                 "line_force", "line_gradient", "line_force_rate", "line_potential", "on_onset")
 GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor")
 TANGENTS = ("none", "qr", "propagator")  #: what may ride along the state
 _PACKAGE = Path(__file__).resolve().parent.parent
@@ -233,8 +234,12 @@ def _bindings(c: Composition) -> str:
     lines.append(f"from {law} import " + ", ".join(f"{f} as law_{f}" for f in LAW_FUNCTIONS))
     lines.append(f"from {ground} import "
                  + ", ".join(f"{f} as ground_{f}" for f in GROUND_FUNCTIONS))
+    law_module = importlib.import_module(law)
     lines += [
-        f"LAW = {P_BETA}",
+        f"LAW = {law_base(c.law)}",
+        f"LAW_DISSIPATIVE = {bool(law_module.DISSIPATIVE)}",
+        f"LAW_MEMORY = {bool(law_module.MEMORY)}",
+        f"LAW_JUMPS = {bool(law_module.JUMPS)}",
         f"GROUND = {P_PERIOD_RATIO}",
         f"TANGENT = {c.tangent != 'none'}",
         "from chaospound.engine.bookkeeping import "
@@ -265,6 +270,44 @@ def _bindings(c: Composition) -> str:
         if u.gap is None:
             lines.append("from chaospound.physics.models.user_support import no_gap as user_gap")
     return "\n".join(lines) + "\n"
+
+
+def law_base(law: str) -> int:
+    """First slot of a law's block in the packed vector.
+
+    Hertz's block ``(beta, chi)`` is the scene's own contact slots ``P_BETA,
+    P_CHI``; every other law's block follows the fixed layout, at ``N_PARAMS``
+    (:meth:`chaospound.scene.Scene.pack` appends it).
+    """
+    return P_BETA if law == "hertz" else N_PARAMS
+
+
+def check_tangent(c: Composition) -> None:
+    """Refuse tangent dynamics the engine cannot yet linearise exactly.
+
+    A law with per-episode memory (its force depends on the onset velocity v0,
+    itself a function of the state at the onset) or with jumps needs a jump map
+    (saltation) in the variational equations at every onset; without it the
+    exponents and monodromy matrices would be silently wrong.
+    """
+    if c.tangent == "none":
+        return
+    law = importlib.import_module(LAWS[c.law])
+    if getattr(law, "POINT_JACOBIAN_SINGULAR", False) and c.model in POINT_MODELS:
+        raise ValueError(f"contact law {c.law!r} on the {c.model} model: Lyapunov exponents "
+                         "and monodromy matrices are not available (its point contact's "
+                         "Jacobian is singular at every onset); use the two-trajectory "
+                         "estimate (chaospound.dynamics.lyapunov."
+                         "largest_exponent_two_trajectory), or a towers model, whose line "
+                         "contact integrates the singularity")
+    if law.MEMORY or law.JUMPS:
+        why = ("its onset velocity v0 is per-episode memory" if law.MEMORY
+               else "its force jumps at onset")
+        raise ValueError(f"contact law {c.law!r}: Lyapunov exponents and monodromy matrices "
+                         f"are not available yet ({why}, which needs a saltation matrix at "
+                         "every onset); use the two-trajectory estimate "
+                         "(chaospound.dynamics.lyapunov.largest_exponent_two_trajectory) or "
+                         "an elastic or Jankowski law")
 
 
 def _footer(c: Composition) -> str:
@@ -391,6 +434,7 @@ def engine_for(c: Composition) -> Engine:
 
 
 def _load(c: Composition) -> Engine:
+    check_tangent(c)
     if c.user is not None and c.user.module is None:
         return Engine(c, _load_in_memory(c), cached_file=False)
     source = generate_source(c)

@@ -58,6 +58,8 @@ from chaospound.kernels.free import (
     DENSE_EVALS,
     DENSE_ROWS,
     GROUND,
+    LAW,
+    LAW_MEMORY,
     N_BASE,
     N_ENDS,
     NEW_EVALS,
@@ -67,6 +69,7 @@ from chaospound.kernels.free import (
     end_value,
     ground_anchor,
     initial_step,
+    law_on_onset,
     locate_extremum,
     locate_root,
     model_contact_point,
@@ -366,6 +369,11 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             else:
                 inside_hi = not inside_hi
             now_active = inside_lo or inside_hi
+            if now_active and not active and LAW_MEMORY:
+                # the law's per-episode memory (v0), at every onset, recorded or not
+                model_ends(t_ev, work, p, ends_tmp)
+                _, _, v_onset = model_contact_point(t_ev, work, p, ends_tmp)
+                law_on_onset(p, LAW, v_onset)
             if now_active and not active:
                 # onset of an episode
                 if not record_done and k >= k_record and capacity > 0:

@@ -16,6 +16,9 @@ def _unbound(*args):
 
 # ---- composition constants (block offsets, sizes, switches fixed at generation)
 LAW = 0  #: first slot of the contact law's block
+LAW_DISSIPATIVE = False  #: the law's force depends on the penetration rate
+LAW_MEMORY = False  #: the law keeps per-episode memory (written at every onset)
+LAW_JUMPS = False  #: the law's force can jump at an onset or a release
 GROUND = 0  #: first slot of the ground motion's block
 N_BASE = 0  #: state dimension of the model (the tangent vectors follow it)
 N_ENDS = 0  #: contact ends the events watch: 2 (line contact), 1 (point), 0 (none)
@@ -31,6 +34,7 @@ USER_BASE = USER_END = USER_JAC = 0  #: a user system's parameters and Jacobian 
 # ---- contact law
 law_point_force = law_point_stiffness = law_point_force_rate = law_point_potential = _unbound
 law_line_force = law_line_gradient = law_line_force_rate = law_line_potential = _unbound
+law_on_onset = _unbound
 # ---- ground motion
 ground_at = ground_anchor = ground_shifted = ground_at_anchor = _unbound
 # ---- model

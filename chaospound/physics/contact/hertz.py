@@ -130,18 +130,20 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
 
     Returns
     -------
-    (dF_ddc, dF_dslope, dM_ddc, dM_dslope) : tuple of float
+    (F_dc, F_sl, M_dc, M_sl, F_rc, F_rs, M_rc, M_rs) : tuple of float
         Derivatives of the force and moment with respect to the centre
-        penetration ``d_c`` and the slope (an elastic law has no rate terms).
+        penetration ``d_c`` and the slope, then with respect to their rates
+        (0: an elastic law has no rate terms).
     """
     if d_lo <= 0.0 and d_hi <= 0.0:
-        return 0.0, 0.0, 0.0, 0.0
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     beta = p[base]
     chi = p[base + 1]
     n0, n1, n2 = moments(chi - 1.0, d_lo, d_hi)
     length = 2.0 * half_length
     scale = beta * chi
-    return scale * n0, scale * length * n1, scale * length * n1, scale * length * length * n2
+    return (scale * n0, scale * length * n1, scale * length * n1, scale * length * length * n2,
+            0.0, 0.0, 0.0, 0.0)
 
 
 @kernel
@@ -151,7 +153,7 @@ def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo
 
     The accelerations (the interface of the dissipative laws) are unused.
     """
-    fc, fs, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length)
+    fc, fs, _, _, _, _, _, _ = line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length)
     return fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / (2.0 * half_length)
 
 

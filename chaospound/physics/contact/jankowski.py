@@ -48,6 +48,11 @@ CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part'
 DISSIPATIVE = True  #: the force depends on the penetration rate
 JUMPS = False  #: continuous force; its Jacobian jumps at d' = 0
 SWITCHES = 1  #: the surface d' = 0 while in contact (approach -> restitution)
+#: dF/dd grows like d^(-3/4) d' as a point contact starts (the damping coefficient
+#: goes like d^(1/4)): integrable, so the flow is differentiable, but the variational
+#: equations of a point contact are singular at every onset and an adaptive step
+#: cannot follow them; along a line the singularity is integrated over the overlap
+POINT_JACOBIAN_SINGULAR = True
 
 
 def damping_ratio(e: float) -> float:

@@ -8,6 +8,7 @@ X_B, X_B')``, a point contact ``d = X_A - X_B - a``. A template, as
 
 from chaospound.kernels.free import (
     LAW,
+    LAW_DISSIPATIVE,
     law_point_force,
     law_point_force_rate,
     law_point_potential,
@@ -97,10 +98,10 @@ def model_trace(p):
 
 @kernel
 def model_linearize(t, y, p):
-    """The contact stiffness dF/dd (and 8 unused zeros)."""
+    """The contact stiffness dF/dd and damping dF/dd' (and 7 unused zeros)."""
     d = y[0] - y[2] - p[P_GAP]
-    stiffness, _ = law_point_stiffness(p, LAW, d, y[1] - y[3])
-    return stiffness, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    stiffness, damping = law_point_stiffness(p, LAW, d, y[1] - y[3])
+    return stiffness, damping, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
 @kernel
@@ -110,6 +111,8 @@ def model_jvp(p, lin, v, out):
     a = TOWER_A
     b = TOWER_B
     squeeze = stiffness * (v[0] - v[2])
+    if LAW_DISSIPATIVE:
+        squeeze += lin[1] * (v[1] - v[3])
     out[0] = v[1]
     out[1] = -p[a + T_OM2] * v[0] - p[a + T_CX] * v[1] - p[a + T_MU] * squeeze
     out[2] = v[3]

@@ -8,6 +8,7 @@ docs/model.md section 9 (the reduction of the towers model to one tower). State
 from chaospound.kernels.free import (
     GROUND,
     LAW,
+    LAW_DISSIPATIVE,
     ground_at,
     law_line_force,
     law_line_force_rate,
@@ -42,9 +43,19 @@ def model_rhs(t, y, p, ug, vg, out):
     y_c = p[P_Y_C]
     y_ca = y[2] + p[TOWER_A + T_EY]
     d_c = y[0] - ug - p[P_GAP] - th_a * (y_c - y_ca)
-    force, moment, _, _ = law_line_force(p, LAW, d_c, -th_a, 0.0, 0.0, p[P_HALF_L])
+    rate_c, rate_slope = _rates(t, y, p)
+    force, moment, _, _ = law_line_force(p, LAW, d_c, -th_a, rate_c, rate_slope, p[P_HALF_L])
     tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
                 -force, -th_a * force, moment - (y_ca - y_c) * force, out, 0)
+
+
+@inline
+def _rates(t, y, p):
+    """``(d d_c/dt, d slope/dt)`` for a law that depends on the penetration rate
+    (against the moving wall); ``(0, 0)`` for an elastic law."""
+    if LAW_DISSIPATIVE:
+        return model_rate(t, y, p, p[P_Y_C]), -y[5]
+    return 0.0, 0.0
 
 
 @inline
@@ -84,7 +95,8 @@ def model_forces(t, y, p, q_out):
     y_c = p[P_Y_C]
     y_ca = y[2] + p[TOWER_A + T_EY]
     d_c = y[0] - ug - p[P_GAP] - th_a * (y_c - y_ca)
-    force, moment, _, _ = law_line_force(p, LAW, d_c, -th_a, 0.0, 0.0, p[P_HALF_L])
+    rate_c, rate_slope = _rates(t, y, p)
+    force, moment, _, _ = law_line_force(p, LAW, d_c, -th_a, rate_c, rate_slope, p[P_HALF_L])
     q_out[0] = -force
     q_out[1] = -th_a * force
     q_out[2] = moment - (y_ca - y_c) * force
@@ -133,22 +145,32 @@ def model_linearize(t, y, p):
     arm_a = y[2] + p[TOWER_A + T_EY] - y_c
     ug, _ = ground_at(t, p, GROUND)
     d_c = y[0] - ug - p[P_GAP] + th_a * arm_a
-    force, _, d_lo, d_hi = law_line_force(p, LAW, d_c, -th_a, 0.0, 0.0, half)
-    fc, fs, mc, ms = law_line_gradient(p, LAW, d_lo, d_hi, 0.0, 0.0, half)
-    return force, fc, fs, mc, ms, th_a, 0.0, arm_a, 0.0
+    rate_c, rate_slope = _rates(t, y, p)
+    force, _, d_lo, d_hi = law_line_force(p, LAW, d_c, -th_a, rate_c, rate_slope, half)
+    r_lo = rate_c - rate_slope * half
+    r_hi = rate_c + rate_slope * half
+    fc, fs, mc, ms, frc, frs, mrc, mrs = law_line_gradient(p, LAW, d_lo, d_hi, r_lo, r_hi, half)
+    return (force, fc, fs, mc, ms, th_a, 0.0, arm_a, 0.0, frc, frs, mrc, mrs,
+            y[3], 0.0, y[5], 0.0)
 
 
 @kernel
 def model_jvp(p, lin, v, out):
     """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`."""
     structural_jvp(p, TOWER_A, v, out, 0)
-    force, fc, fs, mc, ms, th_a, _, arm_a, _ = lin
+    force, fc, fs, mc, ms, th_a, _, arm_a, _ = lin[:9]
     if force == 0.0 and fc == 0.0:
         return
     ddc = v[0] + th_a * v[2] + arm_a * v[4]
     dsl = -v[4]
     d_force = fc * ddc + fs * dsl
     d_moment = mc * ddc + ms * dsl
+    if LAW_DISSIPATIVE:
+        frc, frs, mrc, mrs, vy_a, _, vth_a, _ = lin[9:]
+        drc = v[1] + arm_a * v[5] + vth_a * v[2] + vy_a * v[4] + th_a * v[3]
+        drs = -v[5]
+        d_force += frc * drc + frs * drs
+        d_moment += mrc * drc + mrs * drs
     mu_a = p[TOWER_A + T_MU]
     out[1] -= mu_a * d_force
     out[3] += mu_a * (-th_a * d_force - force * v[4])

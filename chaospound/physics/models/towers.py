@@ -20,11 +20,15 @@ The linearisation (variational equations, docs/model.md section 12)::
     dQ_XA = -dF,  dQ_YA = -th_A dF - F dth_A,  dQ_thA = dM - (y_cA - y_c) dF - F dY_A
     dQ_XB = +dF,  dQ_YB = +th_B dF + F dth_B,  dQ_thB = -dM + (y_cB - y_c) dF + F dY_B
 
-with ``dF = F_c dd_c + F_s dslope`` and ``dM = M_c dd_c + M_s dslope``.
+with ``dF = F_c dd_c + F_s dslope`` and ``dM = M_c dd_c + M_s dslope``; a law that
+depends on the penetration rate adds ``F_rc d rate_c + F_rs d rate_slope`` (and the
+same for M), with ``rate_c = X_A' - X_B' + th_A' arm_A - th_B' arm_B + th_A Y_A'
+- th_B Y_B'`` (``arm_i = y_ci - y_c``) and ``rate_slope = th_B' - th_A'``.
 """
 
 from chaospound.kernels.free import (
     LAW,
+    LAW_DISSIPATIVE,
     law_line_force,
     law_line_force_rate,
     law_line_gradient,
@@ -72,13 +76,29 @@ def model_rhs(t, y, p, ug, vg, out):
     y_ca = y[2] + p[TOWER_A + T_EY]
     y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
     d_c = y[0] - y[6] - p[P_GAP] - th_a * (y_c - y_ca) + th_b * (y_c - y_cb)
-    force, moment, _, _ = law_line_force(p, LAW, d_c, th_b - th_a, 0.0, 0.0, p[P_HALF_L])
+    rate_c, rate_slope = _rates(t, y, p)
+    force, moment, _, _ = law_line_force(p, LAW, d_c, th_b - th_a, rate_c, rate_slope,
+                                         p[P_HALF_L])
     q_tha = moment - (y_ca - y_c) * force
     q_thb = -(moment - (y_cb - y_c) * force)
     tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
                 -force, -th_a * force, q_tha, out, 0)
     tower_accel(p, TOWER_B, y[6], y[7], y[8], y[9], th_b, y[11], ug, vg,
                 force, th_b * force, q_thb, out, 6)
+
+
+@inline
+def _rates(t, y, p):
+    """``(d d_c/dt, d slope/dt)`` for a law that depends on the penetration rate.
+
+    d(y, t) is linear in y, and so is its time derivative at fixed y: its value
+    at the overlap's centre (:func:`model_rate`) and its slope ``th_B' - th_A'``.
+    An elastic law does not read them (``LAW_DISSIPATIVE`` is a constant of the
+    composition, so the branch compiles away).
+    """
+    if LAW_DISSIPATIVE:
+        return model_rate(t, y, p, p[P_Y_C]), y[11] - y[5]
+    return 0.0, 0.0
 
 
 @inline
@@ -130,7 +150,9 @@ def model_forces(t, y, p, q_out):
     y_ca = y[2] + p[TOWER_A + T_EY]
     y_cb = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY]
     d_c = y[0] - y[6] - p[P_GAP] - th_a * (y_c - y_ca) + th_b * (y_c - y_cb)
-    force, moment, _, _ = law_line_force(p, LAW, d_c, th_b - th_a, 0.0, 0.0, p[P_HALF_L])
+    rate_c, rate_slope = _rates(t, y, p)
+    force, moment, _, _ = law_line_force(p, LAW, d_c, th_b - th_a, rate_c, rate_slope,
+                                         p[P_HALF_L])
     q_out[0] = -force
     q_out[1] = -th_a * force
     q_out[2] = moment - (y_ca - y_c) * force
@@ -183,9 +205,13 @@ def model_linearize(t, y, p):
     arm_a = y[2] + p[TOWER_A + T_EY] - y_c
     arm_b = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY] - y_c
     d_c = y[0] - y[6] - p[P_GAP] + th_a * arm_a - th_b * arm_b
-    force, _, d_lo, d_hi = law_line_force(p, LAW, d_c, th_b - th_a, 0.0, 0.0, half)
-    fc, fs, mc, ms = law_line_gradient(p, LAW, d_lo, d_hi, 0.0, 0.0, half)
-    return force, fc, fs, mc, ms, th_a, th_b, arm_a, arm_b
+    rate_c, rate_slope = _rates(t, y, p)
+    force, _, d_lo, d_hi = law_line_force(p, LAW, d_c, th_b - th_a, rate_c, rate_slope, half)
+    r_lo = rate_c - rate_slope * half
+    r_hi = rate_c + rate_slope * half
+    fc, fs, mc, ms, frc, frs, mrc, mrs = law_line_gradient(p, LAW, d_lo, d_hi, r_lo, r_hi, half)
+    return (force, fc, fs, mc, ms, th_a, th_b, arm_a, arm_b, frc, frs, mrc, mrs,
+            y[3], y[9], y[5], y[11])
 
 
 @kernel
@@ -193,13 +219,20 @@ def model_jvp(p, lin, v, out):
     """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`."""
     structural_jvp(p, TOWER_A, v, out, 0)
     structural_jvp(p, TOWER_B, v, out, 6)
-    force, fc, fs, mc, ms, th_a, th_b, arm_a, arm_b = lin
+    force, fc, fs, mc, ms, th_a, th_b, arm_a, arm_b = lin[:9]
     if force == 0.0 and fc == 0.0:
         return
     ddc = v[0] + th_a * v[2] + arm_a * v[4] - v[6] - th_b * v[8] - arm_b * v[10]
     dsl = v[10] - v[4]
     d_force = fc * ddc + fs * dsl
     d_moment = mc * ddc + ms * dsl
+    if LAW_DISSIPATIVE:
+        frc, frs, mrc, mrs, vy_a, vy_b, vth_a, vth_b = lin[9:]
+        drc = (v[1] - v[7] + arm_a * v[5] + vth_a * v[2] - arm_b * v[11] - vth_b * v[8]
+               + vy_a * v[4] + th_a * v[3] - vy_b * v[10] - th_b * v[9])
+        drs = v[11] - v[5]
+        d_force += frc * drc + frs * drs
+        d_moment += mrc * drc + mrs * drs
     mu_a = p[TOWER_A + T_MU]
     mu_b = p[TOWER_B + T_MU]
     out[1] -= mu_a * d_force

@@ -7,6 +7,7 @@ A template, as :mod:`chaospound.physics.models.towers`.
 from chaospound.kernels.free import (
     GROUND,
     LAW,
+    LAW_DISSIPATIVE,
     ground_at,
     law_point_force,
     law_point_force_rate,
@@ -94,11 +95,11 @@ def model_trace(p):
 
 @kernel
 def model_linearize(t, y, p):
-    """The contact stiffness dF/dd (and 8 unused zeros)."""
+    """The contact stiffness dF/dd and damping dF/dd' (and 7 unused zeros)."""
     ug, vg = ground_at(t, p, GROUND)
     d = y[0] - ug - p[P_GAP]
-    stiffness, _ = law_point_stiffness(p, LAW, d, y[1] - vg)
-    return stiffness, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    stiffness, damping = law_point_stiffness(p, LAW, d, y[1] - vg)
+    return stiffness, damping, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
 @kernel
@@ -107,6 +108,8 @@ def model_jvp(p, lin, v, out):
     a = TOWER_A
     out[0] = v[1]
     out[1] = -(p[a + T_OM2] + p[a + T_MU] * lin[0]) * v[0] - p[a + T_CX] * v[1]
+    if LAW_DISSIPATIVE:
+        out[1] -= p[a + T_MU] * lin[1] * v[1]
 
 
 @kernel
