@@ -79,13 +79,15 @@ LAWS = {
 GROUNDS = {
     "sine": "chaospound.physics.ground.sine",
     "none": "chaospound.physics.ground.none",
+    "record": "chaospound.physics.ground.record",
+    "stochastic": "chaospound.physics.ground.stochastic",
 }
 #: the engine's own templates, after the model's
 TEMPLATES = ("chaospound.engine.glue", "chaospound.solvers.steppers",
              "chaospound.engine.events", "chaospound.engine.loop")
 LAW_FUNCTIONS = ("point_force", "point_stiffness", "point_force_rate", "point_potential",
                  "line_force", "line_gradient", "line_force_rate", "line_potential", "on_onset")
-GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor")
+GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor", "next_kink")
 TANGENTS = ("none", "qr", "propagator")  #: what may ride along the state
 _PACKAGE = Path(__file__).resolve().parent.parent
 
@@ -240,7 +242,9 @@ def _bindings(c: Composition) -> str:
         f"LAW_DISSIPATIVE = {bool(law_module.DISSIPATIVE)}",
         f"LAW_MEMORY = {bool(law_module.MEMORY)}",
         f"LAW_JUMPS = {bool(law_module.JUMPS)}",
-        f"GROUND = {P_PERIOD_RATIO}",
+        f"GROUND = {ground_base(c)}",
+        f"GROUND_PERIODIC = {c.ground in ('sine', 'none')}",
+        f"GROUND_KINKS = {bool(importlib.import_module(ground).KINKS)}",
         f"TANGENT = {c.tangent != 'none'}",
         "from chaospound.engine.bookkeeping import "
         + ("store_propagator" if c.tangent == "propagator" else "orthonormalize")
@@ -280,6 +284,26 @@ def law_base(law: str) -> int:
     (:meth:`chaospound.scene.Scene.pack` appends it).
     """
     return P_BETA if law == "hertz" else N_PARAMS
+
+
+def law_block_size(law: str) -> int:
+    """Slots of a law's block appended after ``N_PARAMS`` (0 for Hertz: its own slots)."""
+    if law == "hertz":
+        return 0
+    module = importlib.import_module(LAWS[law])
+    return len(module.PARAMETERS) + len(module.MEMORY)
+
+
+def ground_base(c: Composition) -> int:
+    """First slot of the ground motion's block.
+
+    The sine's block ``(period_ratio, ...)`` is the scene's ``P_PERIOD_RATIO``;
+    a record's or a stochastic motion's block (its samples) follows the law's
+    block, after ``N_PARAMS`` (:meth:`chaospound.scene.Scene.pack`).
+    """
+    if c.ground in ("sine", "none"):
+        return P_PERIOD_RATIO
+    return N_PARAMS + law_block_size(c.law)
 
 
 def check_tangent(c: Composition) -> None:

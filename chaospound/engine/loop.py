@@ -4,7 +4,10 @@ A template (:mod:`.compose`): the loop of every composition. Time is kept as
 (cycle index k, local time tau): ``t = t0 + k T + tau`` with ``t0`` the
 stroboscopic section's time origin and ``tau`` reset to exactly 0 at every
 section, so the forcing phase never accumulates round-off, however long the
-run. Steps end exactly on every section.
+run. Steps end exactly on every section. For a ground motion that is not
+periodic (a record) the kernels see absolute time: the local ``t0`` advances
+by T at every section, and steps also land on the motion's samples
+(``GROUND_KINKS``), where its acceleration has kinks.
 
 Contact events are the sign changes of the end penetrations d_lo, d_hi
 (:mod:`.events`). With ``restart`` on, a step that contains one is redone so
@@ -58,6 +61,8 @@ from chaospound.kernels.free import (
     DENSE_EVALS,
     DENSE_ROWS,
     GROUND,
+    GROUND_KINKS,
+    GROUND_PERIODIC,
     LAW,
     LAW_MEMORY,
     N_BASE,
@@ -68,6 +73,7 @@ from chaospound.kernels.free import (
     dense_prepare,
     end_value,
     ground_anchor,
+    ground_next_kink,
     initial_step,
     law_on_onset,
     locate_extremum,
@@ -87,6 +93,9 @@ from chaospound.solvers.tableaux import MAX_DENSE, MAX_STAGES
 
 FOLLOW_CYCLES = 5  #: cycles an episode running at the window's end is followed
 MERGE_TOL = 1e-10  #: events closer than this in time are handled together
+#: a ground sample closer than this (relative to max(1, |t|)) counts as reached: a
+#: step that landed on it a rounding error short does not take a second, tiny step
+KINK_SLACK = 1e-12
 
 # ==== template ====
 
@@ -166,6 +175,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
 
     k = int(clock[0])
     tau = clock[1]
+    if not GROUND_PERIODIC:
+        t0 += k * period  # absolute time: t = t0 + tau
     h = clock[2]
     for i in range(N_STATS):
         stats[i] = 0
@@ -210,7 +221,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                 for i in range(n):
                     strobe[row, i] = y[i]
                 if n_samples > 0 and n_traj < traj.shape[0]:
-                    store_sample(traj, n_traj, t0 + k * period, y, n)
+                    store_sample(traj, n_traj, t0 + k * period if GROUND_PERIODIC else t0, y, n)
                     n_traj += 1
             if k >= k_end:
                 record_done = True
@@ -230,6 +241,13 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         if h_try >= to_end or to_end - h_try < 1e-12 * max(1.0, period):
             h_try = to_end
             reaches_end = True
+        if GROUND_KINKS:  # land on the motion's samples, where u_g'' has kinks
+            t_abs = t0 + tau
+            to_kink = ground_next_kink(t_abs + KINK_SLACK * max(1.0, abs(t_abs)), p,
+                                       GROUND) - t_abs
+            if to_kink < to_end and h_try >= to_kink:
+                h_try = to_kink
+                reaches_end = False
         t_here = t0 + tau
         err, c0_new, c1_new = step(t_here, h_try, y, f0, p, rtol, atol, stage, y_new, f_new,
                                    c0, c1)
@@ -390,7 +408,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                     episode = -1
             elif active and not now_active:
                 if episode >= 0:
-                    duration = t_ev + k * period - imp[episode, IMP_TIME]
+                    duration = (t_ev + k * period if GROUND_PERIODIC else t_ev) - imp[
+                        episode, IMP_TIME]
                     if duration <= 0.0 and episode == n_imp - 1:
                         # onset and release at one instant: a touch at round-off level
                         # (rattling at the integrator's noise floor), no contact, no impact
@@ -442,6 +461,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         if reaches_end:
             if seg_end == period:
                 k += 1
+                if not GROUND_PERIODIC:  # t0 is the section's absolute start
+                    t0 += period
             tau = 0.0
             at_section = True
             c0, c1 = ground_anchor(t0, p, GROUND)
@@ -463,10 +484,10 @@ def record_onset(p, t_force, k, period, t0, state, imp, imp_state, row, n, ends)
     model_ends(t_force, state, p, ends)
     d_max = max(ends[0], ends[1])
     corner, y_at, velocity = model_contact_point(t_force, state, p, ends)
-    x = t_force / period
+    x = (t_force if GROUND_PERIODIC else t_force - t0) / period
     if x >= 1.0:
         x -= 1.0
-    imp[row, IMP_TIME] = t_force + k * period
+    imp[row, IMP_TIME] = t_force + k * period if GROUND_PERIODIC else t_force
     imp[row, IMP_PHASE] = x
     imp[row, IMP_VELOCITY] = velocity
     imp[row, IMP_CORNER] = corner
@@ -529,7 +550,7 @@ def store_samples(dense, y, t0, k, period, tau, h, n_samples, traj, n_traj, work
     while j < n_samples and j * dt <= tau + h and n_traj < traj.shape[0]:
         theta = min((j * dt - tau) / h, 1.0)
         dense_eval(DENSE_ROWS, dense, y, h, theta, work)
-        store_sample(traj, n_traj, t0 + k * period + j * dt, work, n)
+        store_sample(traj, n_traj, (t0 + k * period if GROUND_PERIODIC else t0) + j * dt, work, n)
         n_traj += 1
         j += 1
     return n_traj

@@ -20,6 +20,8 @@ LAW_DISSIPATIVE = False  #: the law's force depends on the penetration rate
 LAW_MEMORY = False  #: the law keeps per-episode memory (written at every onset)
 LAW_JUMPS = False  #: the law's force can jump at an onset or a release
 GROUND = 0  #: first slot of the ground motion's block
+GROUND_PERIODIC = True  #: the motion is periodic with the section interval (the sine)
+GROUND_KINKS = False  #: the motion's acceleration has kinks at samples (a record)
 N_BASE = 0  #: state dimension of the model (the tangent vectors follow it)
 N_ENDS = 0  #: contact ends the events watch: 2 (line contact), 1 (point), 0 (none)
 TANGENT = False  #: integrate tangent vectors after the state (QR at sections)
@@ -36,7 +38,7 @@ law_point_force = law_point_stiffness = law_point_force_rate = law_point_potenti
 law_line_force = law_line_gradient = law_line_force_rate = law_line_potential = _unbound
 law_on_onset = _unbound
 # ---- ground motion
-ground_at = ground_anchor = ground_shifted = ground_at_anchor = _unbound
+ground_at = ground_anchor = ground_shifted = ground_at_anchor = ground_next_kink = _unbound
 # ---- model
 model_rhs = model_ends = model_rate = model_forces = model_force_rate = _unbound
 model_potential = model_energy = model_trace = model_linearize = model_jvp = _unbound
