@@ -1,4 +1,4 @@
-"""Convergence and consistency of the Runge-Kutta kernels (the steppers of chaospound.solvers, composed).
+"""Convergence and consistency of the Runge-Kutta steppers (chaospound.solvers, composed).
 
 Test problem: the PAIR model with a gap so large that the towers never touch,
 i.e. two uncoupled linear damped oscillators driven through their base,
