@@ -110,7 +110,8 @@ PAPER_RTOL = 1e-3  #: Press et al.'s Cash-Karp at 0.1 % error (docs/model.md sec
 #: about 100 MB; TOML parses in about 0.1 s per MB
 MAX_SCENE_BYTES = 128 * 2**20
 
-GROUNDS = ("sine", "none")
+GROUNDS = ("sine", "none", "record")
+RECORD_UNITS = ("auto", "g", "m/s^2", "cm/s^2")  #: accelerogram units ("auto": the file's, else g)
 CONTACT_LAWS = tuple(LAWS)  #: the contact laws (chaospound/physics/contact/, one module each)
 DAMPING_VARIANTS = ("lankarani-nikravesh", "ye")  #: hertzdamp's damping formulas
 DEFAULT_RESTITUTION = 0.65  #: concrete on concrete, about 0.5-0.7
@@ -175,6 +176,8 @@ class _Spec:
             return "must be one of " + ", ".join(repr(c) for c in self.choices)
         if self.kind == "bool":
             return "must be true or false (or yes/no, 1/0)"
+        if self.kind == "path":
+            return "must be a file path"
         if self.low is not None and self.high is not None:
             return f"must be in [{self.low:g}, {self.high:g})"
         if self.low is not None:
@@ -198,7 +201,16 @@ def _real(meaning: str) -> _Spec:
 
 _GLOBAL_SPECS: dict[str, _Spec] = {
     "period_ratio": _pos("excitation period over tower A's, T/T_Ax"),
-    "ground": _Spec("choice", "ground motion u_g = sin(t/r) or none", choices=GROUNDS),
+    "ground": _Spec("choice", "ground motion: u_g = sin(t/r), none, or a recorded accelerogram",
+                    choices=GROUNDS),
+    "ground_file": _Spec("path", "accelerogram file (.AT2 or text: time, acceleration)",
+                         optional=True),
+    "ground_units": _Spec("choice", "units of the accelerogram ('auto': the file's, else g)",
+                          choices=RECORD_UNITS),
+    "ground_scale": _Spec("float", "factor on the recorded accelerations"),
+    "ground_dt": _pos("sample interval [s] of a text record without a time column", True),
+    "length_unit": _pos("A_g in metres: the model's length unit, for a record", True),
+    "tower_period": _pos("T_Ax in seconds: tower A's x period, for a record", True),
     "freq_ratio": _pos("frequency ratio Om = T_Ax/T_Bx = omega_Bx/omega_Ax"),
     "mass_ratio": _pos("mass ratio m = m_A/m_B; 'auto': freq_ratio**2", optional=True),
     "gap": _nonneg("clear gap at rest, in units of A_g"),
@@ -258,8 +270,9 @@ _SUFFIXES = ("_A", "_B")
 
 #: flat parameter name -> (component, field); component "scene" is the Scene itself
 _TARGET: dict[str, tuple[str, str]] = {
-    "period_ratio": ("excitation", "period_ratio"),
-    "ground": ("excitation", "ground"),
+    **{n: ("excitation", n) for n in ("period_ratio", "ground", "ground_file", "ground_units",
+                                      "ground_scale", "ground_dt", "length_unit",
+                                      "tower_period")},
     **{
         n: ("scene", n)
         for n in ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping")
@@ -359,7 +372,8 @@ def _coerce(name: str, value: object, shown: str | None = None) -> object:
         value is None or (isinstance(value, str) and value.strip().lower() in _AUTO)
     ):
         return None
-    parse = {"float": _as_float, "int": _as_int, "bool": _as_bool, "choice": _as_choice}
+    parse = {"float": _as_float, "int": _as_int, "bool": _as_bool, "choice": _as_choice,
+             "path": _as_path}
     return parse[spec.kind](shown, value, spec)
 
 
@@ -419,6 +433,14 @@ def _as_bool(name: str, value: object, spec: _Spec) -> bool:
         if word in _FALSE:
             return False
     raise _bad(name, value, spec)
+
+
+def _as_path(name: str, value: object, spec: _Spec) -> str:
+    if isinstance(value, str | os.PathLike) and str(value).strip():
+        text = str(value).strip()
+        if len(text) <= 4096 and "\0" not in text:
+            return text
+    raise _bad(name, value, spec, "must be a file path")
 
 
 def _as_choice(name: str, value: object, spec: _Spec) -> str:
@@ -574,21 +596,63 @@ def _make_tower(fields: Mapping[str, object], suffix: str) -> Tower:
 
 @dataclass(frozen=True)
 class Excitation:
-    """Harmonic ground motion u_g(t) = sin(t / r) (normalised by A_g, omega_Ax).
+    """The ground motion (docs/ground_motions.md), normalised by A_g and omega_Ax.
 
     Parameters
     ----------
     period_ratio : float
-        r = T / T_Ax, excitation period over tower A's period, > 0.
-    ground : {"sine", "none"}
-        "none": u_g = 0 (free, and with zero damping conservative, motion).
+        r = T / T_Ax, > 0: the harmonic motion u_g(t) = sin(t / r) has period
+        T = 2 pi r, the interval of the stroboscopic sections; with a record the
+        sections keep that interval (transient and record windows count it).
+    ground : {"sine", "none", "record"}
+        "none": u_g = 0 (free, and with zero damping conservative, motion);
+        "record": the accelerogram ``ground_file``, integrated exactly.
+    ground_file : str, optional
+        The accelerogram: a PEER ``.AT2`` or a text file of (time [s],
+        acceleration) rows, or one acceleration column with ``ground_dt``.
+    ground_units : {"auto", "g", "m/s^2", "cm/s^2"}
+        Units of its accelerations ("auto": the .AT2 header's, else g).
+    ground_scale : float
+        Factor on the accelerations (incremental dynamic analysis).
+    ground_dt : float, optional
+        Sample interval [s] of a text file without a time column.
+    length_unit, tower_period : float, optional
+        A_g [m] and T_Ax [s]: the physical length and time of the model's
+        units, which convert a record to them (required with a record).
     """
 
     period_ratio: float = DEFAULT_PERIOD_RATIO
     ground: str = "sine"
+    ground_file: str | None = None
+    ground_units: str = "auto"
+    ground_scale: float = 1.0
+    ground_dt: float | None = None
+    length_unit: float | None = None
+    tower_period: float | None = None
 
     def __post_init__(self) -> None:
         _check_fields(self, _GLOBAL_SPECS)
+        if self.ground == "record":
+            missing = [n for n in ("ground_file", "length_unit", "tower_period")
+                       if getattr(self, n) is None]
+            if missing:
+                raise SceneError(f"ground = record needs {', '.join(missing)} "
+                                 "(the file and the model's length and time units)")
+
+    def record_block(self) -> np.ndarray:
+        """The block of a recorded ground motion (its samples in model units)."""
+        from chaospound.physics.ground import record
+
+        spec = {"file": self.ground_file, "scale": self.ground_scale,
+                "length_scale": self.length_unit, "omega": 2.0 * math.pi / self.tower_period}
+        if self.ground_units != "auto":
+            spec["units"] = self.ground_units
+        if self.ground_dt is not None:
+            spec["dt"] = self.ground_dt
+        try:
+            return record.block(spec)
+        except (ValueError, OSError) as exc:
+            raise SceneError(shorten(str(exc), 200)) from None
 
 
 @dataclass(frozen=True)
@@ -846,6 +910,8 @@ class Scene:
         )
         if self.contact.contact_law != "hertz":  # Hertz's block is (P_BETA, P_CHI)
             p = np.concatenate((p, self.law_block()))
+        if self.excitation.ground == "record":  # after the law's block
+            p = np.concatenate((p, self.excitation.record_block()))
         return p
 
     def law_block(self) -> np.ndarray:
@@ -1236,7 +1302,8 @@ def _updated(component: object, label: str, values: Mapping[str, object]) -> obj
 
 # ================================================================== TOML
 _TABLES: dict[str, tuple[str, ...]] = {
-    "excitation": ("period_ratio", "ground"),
+    "excitation": ("period_ratio", "ground", "ground_file", "ground_units", "ground_scale",
+                   "ground_dt", "length_unit", "tower_period"),
     "structure": ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping"),
     "tower_A": tuple(_TOWER_SPECS),
     "tower_B": tuple(_TOWER_SPECS),
@@ -1289,7 +1356,9 @@ def _scene_from_tables(data: Mapping[str, object]) -> Scene:
 def _toml_document(scene: Scene) -> str:
     """TOML text of a scene; only given forms and non-default Nones are written."""
     tables: dict[str, dict[str, object]] = {
-        "excitation": _fields(scene.excitation),
+        "excitation": {k: v for k, v in _fields(scene.excitation).items()
+                       if k in ("period_ratio", "ground") or scene.excitation.ground == "record"
+                       or v != getattr(Excitation(), k)},
         "structure": {n: getattr(scene, n) for n in _TABLES["structure"]},
         "tower_A": _tower_table(scene.tower_A),
         "tower_B": _tower_table(scene.tower_B),

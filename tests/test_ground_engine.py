@@ -98,3 +98,68 @@ def test_a_record_after_a_law_block(law):
     b = simulate(sampled, transient=4, record=2)
     assert len(a.impacts) == len(b.impacts)
     assert np.max(np.abs(a.strobe.state - b.strobe.state)) < 5e-2  # sampling error, 100 a period
+
+
+# ------------------------------------------------------- scenes and the command line
+
+def _write_records(folder):
+    """The same accelerogram as a PEER .AT2 (in g) and as a two-column text file."""
+    t = np.arange(0.0, 20.0 + 1e-9, 0.01)
+    a = 0.3 * np.sin(2.0 * np.pi * 2.0 * t) * np.exp(-0.15 * t)
+    text = folder / "quake.txt"
+    np.savetxt(text, np.column_stack([t, a]), fmt="%.10e")
+    values = [f"{x: .10E}" for x in a]
+    lines = ["PEER NGA STRONG MOTION DATABASE RECORD", "SYNTHETIC", "UNITS OF G",
+             f"NPTS=  {len(a)}, DT=   .0100 SEC"]
+    lines += ["  ".join(values[i:i + 5]) for i in range(0, len(values), 5)]
+    at2 = folder / "quake.AT2"
+    at2.write_text("\n".join(lines) + "\n")
+    return at2, text
+
+
+def test_a_record_scene_runs_and_both_file_formats_agree(tmp_path):
+    at2, text = _write_records(tmp_path)
+    def scene(path, **more):
+        return load_preset("fig3a").with_params(ground="record", ground_file=str(path),
+                                                length_unit=0.01, tower_period=0.5,
+                                                transient=0, record=5, **more)
+    base = scene(at2)
+    a = simulate(base)
+    b = simulate(scene(text, ground_units="g"))
+    assert len(a.impacts) > 0
+    np.testing.assert_allclose(a.final_state, b.final_state, rtol=0, atol=1e-9)
+    # twice the scale: another response
+    c = simulate(base.with_params(ground_file=str(at2), ground_scale=2.0))
+    assert np.max(np.abs(c.final_state - a.final_state)) > 1e-3
+
+
+def test_a_record_scene_round_trips_through_toml(tmp_path):
+    from chaospound.scene import Scene
+
+    at2, _ = _write_records(tmp_path)
+    scene = load_preset("fig3a").with_params(ground="record", ground_file=str(at2),
+                                             length_unit=0.01, tower_period=0.5)
+    again = Scene.from_toml(scene.to_toml())
+    assert again == scene
+    assert "ground_file" not in load_preset("fig3a").to_toml()  # sine scenes unchanged
+
+
+def test_record_runs_and_refusals_on_the_command_line(tmp_path, capsys):
+    from chaospound.cli import main
+
+    at2, _ = _write_records(tmp_path)
+    record = ["--set", "ground=record", "--set", f"ground_file={at2}", "--set",
+              "length_unit=0.01", "--set", "tower_period=0.5"]
+    assert main(["simulate", "--preset", "fig3a", "--transient", "0", "--record", "3",
+                 "--quiet", *record]) == 0
+    capsys.readouterr()
+    assert main(["classify", "--preset", "fig3a", "--quiet", *record]) == 2
+    assert "periodic forcing" in capsys.readouterr().err
+    bad = tmp_path / "bad.AT2"
+    bad.write_text("header\nheader\nheader\nNPTS=  10, DT= .01 SEC\n 1.0 2.0 x\n")
+    assert main(["simulate", "--preset", "fig3a", "--quiet", "--set", "ground=record",
+                 "--set", f"ground_file={bad}", "--set", "length_unit=0.01", "--set",
+                 "tower_period=0.5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.AT2" in err[0]
+    assert main(["simulate", "--preset", "fig3a", "--quiet", "--set", "ground=record"]) == 2

@@ -253,6 +253,10 @@ def classify(
     from .lyapunov import lyapunov_spectrum
 
     system = as_system(system_or_scene)
+    if system.ground not in ("sine", "none"):
+        raise ValueError(f"ground = {system.ground}: regimes (periodic, quasi-periodic, "
+                         "chaotic) are defined for periodic forcing; simulate the record and "
+                         "read its impacts instead")
     if system.scene is None and not (system.model_id == CUSTOM and system.has_gap):
         raise ValueError(
             f"system {system.name!r} has no impacts to classify: use a pounding scene "
