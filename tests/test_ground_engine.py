@@ -11,7 +11,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from chaospound import load_preset, simulate
+from chaospound import load_preset
+from chaospound.simulate import simulate
 from chaospound.dynamics.system import System
 from chaospound.physics.ground import record, stochastic
 
