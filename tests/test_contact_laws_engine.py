@@ -13,10 +13,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from chaospound import load_preset
-from chaospound.simulate import simulate
 from chaospound.dynamics.system import System, advance, monodromy
 from chaospound.kernels.params import P_GAP, P_PERIOD, T_CX, T_MU, T_OM2, TOWER_A
 from chaospound.physics.contact import hertzdamp, hunt_crossley, jankowski, kelvin_voigt
+from chaospound.simulate import simulate
 
 DISSIPATIVE = ["hertzdamp", "hunt-crossley", "jankowski", "kelvin-voigt"]
 MODULES = {"hertzdamp": hertzdamp, "hunt-crossley": hunt_crossley, "jankowski": jankowski,

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from chaospound import load_preset
-from chaospound.simulate import simulate
 from chaospound.dynamics.system import System
 from chaospound.physics.ground import record, stochastic
+from chaospound.simulate import simulate
 
 
 def _sine_and_record(samples_per_period: int, cycles: int = 12):
