@@ -1,4 +1,11 @@
-"""How to compose the jitted engine: direct calls, dispatcher arguments,
+"""Historical: the measurement behind the redesign (docs/design/composition.md),
+made on the id-dispatching kernels of commit 3fe32a0, which it copies in reduced
+form and checks against ``chaospound.kernels.models``, ``rk`` and ``params``. Those
+modules are gone since the composed engine replaced them; rerun it from a checkout
+of 3fe32a0 (``git worktree add /tmp/old 3fe32a0``). The composed engine's own gate
+is ``benchmarks/bench_versus.py`` and ``benchmarks/golden.py``.
+
+How to compose the jitted engine: direct calls, dispatcher arguments,
 first-class function types, generated modules or closures (issue 14).
 
 A self-contained reduced copy of chaospound's hot path: the adaptive

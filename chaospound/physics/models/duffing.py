@@ -9,7 +9,14 @@ import numpy as np
 from chaospound.kernels.jit import inline, kernel
 from chaospound.kernels.params import REF_0, REF_1, REF_2
 from chaospound.kernels.reference import duffing_rhs
-from chaospound.physics.corners import CORNER_FACE
+from chaospound.physics.models.no_contact import (  # noqa: F401  (bound by the composition)
+    model_contact_point,
+    model_ends,
+    model_force_rate,
+    model_forces,
+    model_potential,
+    model_rate,
+)
 
 # ==== template ====
 N_BASE = 2
@@ -19,37 +26,6 @@ N_ENDS = 0
 @inline
 def model_rhs(t, y, p, ug, vg, out):
     duffing_rhs(t, y, p, out)
-
-
-@inline
-def model_rate(t, y, p, y_at):
-    return 0.0
-
-
-@inline
-def model_ends(t, y, p, out):
-    """No contact: ``(-1, -1, 0, 0)``."""
-    out[0] = -1.0
-    out[1] = -1.0
-    out[2] = 0.0
-    out[3] = 0.0
-
-
-@kernel
-def model_forces(t, y, p, q_out):
-    for i in range(6):
-        q_out[i] = 0.0
-    return 0.0
-
-
-@kernel
-def model_force_rate(t, y, p, ends):
-    return 0.0
-
-
-@kernel
-def model_potential(t, y, p):
-    return 0.0
 
 
 @kernel
@@ -76,6 +52,3 @@ def model_jvp(p, lin, v, out):
     out[1] = -(p[REF_1] + 3.0 * p[REF_2] * x * x) * v[0] - p[REF_0] * v[1]
 
 
-@kernel
-def model_contact_point(t, state, p, ends):
-    return CORNER_FACE, 0.0, ends[2]
