@@ -1796,7 +1796,9 @@ def _regime_map(ax, sweep, branch: str) -> None:
 
 
 def _scene_name(sweep) -> str:
-    """The scene's name, from the resolved scene stored in the file."""
+    """The scene's name, from the resolved scene stored in the file (a system's name)."""
+    if "system" in sweep.meta and "name" in sweep.meta:
+        return str(sweep.meta["name"])
     try:
         return str(json.loads(sweep.meta["scene_resolved"])["name"])
     except (KeyError, TypeError, ValueError):
