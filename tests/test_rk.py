@@ -1,4 +1,6 @@
-"""Convergence and consistency of the Runge-Kutta kernels (the steppers of chaospound.solvers, composed).
+"""Convergence and consistency of the Runge-Kutta kernels.
+
+The steppers of chaospound.solvers, composed into an engine.
 
 Test problem: the PAIR model with a gap so large that the towers never touch,
 i.e. two uncoupled linear damped oscillators driven through their base,
