@@ -326,8 +326,8 @@ def _system_with_assignments(system, assignments: Sequence[str]):
             try:
                 parsed = SYSTEM_SETTINGS[name](value)
             except ValueError:
-                raise CliError(f"--set {name}={shorten(value)}: not a "
-                               f"{SYSTEM_SETTINGS[name].__name__}") from None
+                kind = {int: "an integer", float: "a number"}[SYSTEM_SETTINGS[name]]
+                raise CliError(f"--set {name}={shorten(value)}: not {kind}") from None
             if name == "method" and parsed not in METHOD_NAMES:
                 raise CliError(f"--set method={shorten(value)}: need one of "
                                f"{', '.join(METHOD_NAMES)}")

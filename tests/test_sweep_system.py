@@ -144,6 +144,16 @@ def test_two_axes_with_continuation_both_ways_match_the_scene(tmp_path):
     assert forward[0, 0] == backward[0, 0] == 0 < forward[0, 2] == backward[0, 2]
 
 
+def test_a_system_of_a_scene_sweeps_as_its_scene(tmp_path):
+    """System.from_scene(...).with_solver(...) is stored as the scene with those settings."""
+    short = load_preset("wall").with_params(transient=10, record=2)
+    system = System.from_scene(short).with_solver(**TOL)
+    run_sweep(system, spec_of(system, "gap=1,2"), tmp_path / "system.h5", progress=False)
+    scene = short.with_params(**TOL)
+    run_sweep(scene, spec_of(scene, "gap=1,2"), tmp_path / "scene.h5", progress=False)
+    assert_same_store(tmp_path / "system.h5", tmp_path / "scene.h5")
+
+
 # ------------------------------------------------------------- determinism
 
 
