@@ -630,9 +630,6 @@ def _add_simulate(commands: argparse._SubParsersAction) -> None:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     scene = target_from_args(args)
-    if _is_system(scene) and args.plot is not None:
-        raise CliError(f"--plot {_path(args.plot)}: the run's figure needs a scene's contact "
-                       "model; not drawn for a system FILE.py:ATTR")
     if args.output is not None:
         check_output_path(args.output, overwrite=args.overwrite)
     if args.plot is not None:
@@ -647,7 +644,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         sim = _run_simulation(scene, args.trajectory)
         if args.plot is not None:
             status.set(f"drawing {scene.name}'s time histories and phase diagrams")
-            _simulation_save_plot(sim, args.trajectory, args.plot)
+            _simulation_save_plot(sim, args.trajectory, args.plot,
+                                  scene if _is_system(scene) else None)
     document = _simulation_document(sim)
     if _is_system(scene):
         document["system"] = _system_document(scene)
@@ -661,13 +659,19 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _simulation_save_plot(sim: Simulation, samples_per_cycle: int, path: str) -> None:
+def _simulation_save_plot(sim: Simulation, samples_per_cycle: int, path: str,
+                          system=None) -> None:
     """Time histories and phase diagrams of the run (rerun with dense samples unless the
-    run has at least :data:`PHASE_PLOT_SAMPLES` per cycle: the same steps, interpolated)."""
-    from chaospound.plot import plot_run
+    run has at least :data:`PHASE_PLOT_SAMPLES` per cycle: the same steps, interpolated);
+    the phase diagrams alone for a user's ``system``."""
+    from chaospound.plot import plot_phase_diagrams, plot_run
 
     if samples_per_cycle < PHASE_PLOT_SAMPLES:
-        sim = _run_simulation(sim.scene, PHASE_PLOT_SAMPLES)
+        sim = _run_simulation(sim.scene if sim.scene is not None else system,
+                              PHASE_PLOT_SAMPLES)
+    if sim.scene is None:  # a user's system: no contact model to draw, its phase diagrams
+        _save_figure(plot_phase_diagrams(sim), path)
+        return
     from chaospound.simulate import contact_history
 
     _save_figure(plot_run(sim, contact_history(sim)), path)
@@ -751,7 +755,8 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
         blocks.append("no impacts in the record window")
     summary = _summary(sim, samples_per_cycle, output)
     if plot is not None:
-        summary.append(("wrote", f"{plot} (time histories and phase diagrams)"))
+        drawn = "phase diagrams" if system is not None else "time histories and phase diagrams"
+        summary.append(("wrote", f"{plot} ({drawn})"))
     blocks.append(_table(None, summary, "ll"))
     return "\n\n".join(blocks) + "\n"
 
@@ -1299,9 +1304,6 @@ def _cmd_classify(args: argparse.Namespace) -> int:
         raise CliError(f"--record {args.record}: not used by classify (use --window N)")
     scene = target_from_args(args)
     system = scene if _is_system(scene) else None
-    if system is not None and args.plot is not None:
-        raise CliError(f"--plot {_path(args.plot)}: the phase diagrams are drawn for scenes; "
-                       "not for a system FILE.py:ATTR")
     shortest = system.transient if system is not None else scene.run.transient
     if shortest < 1:
         raise CliError(f"--transient {shortest}: the shortest transient must be >= 1 cycle")
@@ -1349,8 +1351,10 @@ def _classify_save_plot(scene: Scene, regime, path: str) -> None:
     from chaospound.simulate import simulate
 
     rtol, atol = regime.evidence.get("rtol"), regime.evidence.get("atol")
-    if scene.solver.method != "rk4" and rtol is not None and math.isfinite(atol):
-        scene = scene.with_params(rtol=rtol, atol=atol)
+    method = scene.method if _is_system(scene) else scene.solver.method
+    if method != "rk4" and rtol is not None and math.isfinite(atol):
+        scene = (scene.with_solver(rtol=rtol, atol=atol) if _is_system(scene)
+                 else scene.with_params(rtol=rtol, atol=atol))
     record = max(2 * regime.period_cycles, 4) if regime.period_cycles else 8
     run = simulate(scene, transient=regime.transient_used, record=record,
                    samples_per_cycle=PHASE_PLOT_SAMPLES)

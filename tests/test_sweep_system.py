@@ -292,6 +292,10 @@ def test_cli_runs_a_system_file_end_to_end(tmp_path, capsys):
     code, text, err = _cli(capsys, "lyapunov", f"{file}:system", "--cycles", "20", "--quiet")
     assert code == 0, err
     assert "custom (2 states: x dx)" in text
+    figure = tmp_path / "phase.png"
+    code, text, err = _cli(capsys, "simulate", f"{file}:system", "--record", "2", "--plot",
+                           figure, "--quiet")
+    assert code == 0 and figure.stat().st_size > 0 and "(phase diagrams)" in text, err
     # a changed file is another system: resume refuses it in one line
     file.write_text(SYSTEM_FILE.replace('"c": 0.06', '"c": 0.07'))
     code, _, err = _cli(capsys, "sweep", f"{file}:system", "--param", "gap=0.5,1.0,2.0",
