@@ -271,9 +271,10 @@ def test_cli_runs_a_system_file_end_to_end(tmp_path, capsys):
     file.write_text(SYSTEM_FILE)
     out = tmp_path / "x.h5"
     code, text, err = _cli(capsys, "sweep", f"{file}:system", "--param", "gap=0.5,1.0,2.0",
-                           "--set", "transient=30", "--set", "record=4", "-o", out, "--quiet")
+                           "--set", "transient=30", "--set", "record=4", "-o", out, "--quiet",
+                           "--workers", "2")  # the workers import the file's module by name
     assert code == 0, err
-    assert "3 points computed" in text
+    assert "3 points computed" in text and "2 worker(s)" in text
     sweep = open_sweep(out)
     assert sweep.meta["source"] == "my_oscillator.py:system"
     assert sweep.meta["source_sha256"] == __import__("hashlib").sha256(
