@@ -29,6 +29,7 @@ _OTHER_EXPORTS = {
     "lyapunov_spectrum": "chaospound.dynamics.lyapunov",
     "classify": "chaospound.dynamics.classify",
     "custom_system": "chaospound.dynamics.system",
+    "load_system": "chaospound.userfile",
     "find_orbit": "chaospound.orbits.shooting",
     "continue_branch": "chaospound.orbits.continuation",
     "open_branches": "chaospound.orbits.store",

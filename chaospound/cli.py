@@ -16,7 +16,9 @@ Commands::
 Every command that runs a scene takes the same scene options, added by
 :func:`add_scene_options` and turned into a validated
 :class:`~chaospound.scene.Scene` by :func:`scene_from_args`; later commands
-(lyapunov, classify, sweep, plot, bench) reuse both.
+(lyapunov, classify, sweep, plot, bench) reuse both. ``simulate``, ``classify``,
+``lyapunov`` and ``sweep`` also take a user's system, ``FILE.py:ATTR`` in place
+of the scene file (:func:`target_from_args`, :mod:`chaospound.userfile`).
 
 Exit codes: 0 success; 1 a numerical failure
 (:class:`~chaospound.simulate.SimulationError`); 2 bad input (usage, scene
@@ -59,6 +61,7 @@ __all__ = [
     "main",
     "note_sweep_overrides",
     "scene_from_args",
+    "target_from_args",
     "write_json_file",
 ]
 
@@ -180,7 +183,9 @@ def add_scene_options(parser: argparse.ArgumentParser, *, run: bool = True) -> N
     """
     group = parser.add_argument_group("scene")
     group.add_argument(
-        "scene_file", nargs="?", metavar="SCENE.toml", help="scene file (see 'chaospound presets')"
+        "scene_file", nargs="?", metavar="SCENE.toml",
+        help="scene file (see 'chaospound presets'); simulate, classify, lyapunov and sweep "
+        "also take FILE.py:ATTR, a System defined in a Python file (docs/custom_systems.md)"
     )
     group.add_argument("--preset", metavar="NAME", help="a bundled scene instead of a file")
     group.add_argument(
@@ -242,8 +247,12 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
         An unknown preset, a malformed file, a bad or unknown parameter.
     """
     from chaospound.scene import load_preset, load_scene
+    from chaospound.userfile import is_system_spec
 
     preset, path = args.preset, args.scene_file
+    if is_system_spec(path):
+        raise CliError(f"{_path(path)}: this command takes a scene (--preset NAME or SCENE.toml); "
+                       "a system FILE.py:ATTR runs with simulate, classify, lyapunov and sweep")
     if preset is not None and path is not None:
         raise CliError(f"give --preset {shorten(preset)} or the scene file {_path(path)}, not both")
     if preset is None and path is None:
@@ -260,6 +269,110 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
     ]
     assignments = list(args.assignments) + overrides
     return scene.with_assignments(assignments) if assignments else scene
+
+
+#: run and solver settings of a System that --set may change (name -> parser)
+SYSTEM_SETTINGS = {"transient": int, "record": int, "method": str, "rtol": float,
+                   "atol": float, "steps_per_cycle": int, "max_steps": int}
+
+
+def target_from_args(args: argparse.Namespace):
+    """The scene, or the user's System, selected by the scene options.
+
+    A scene argument ``FILE.py:ATTR`` loads a System
+    (:func:`chaospound.userfile.load_system`); ``--set NAME=VALUE`` then sets
+    its named parameters (``System.with_params``) or its run and solver
+    settings (transient, record, method, rtol, atol, steps_per_cycle,
+    max_steps), and the run options (--transient, --record, --method, --rtol,
+    --atol) win over ``--set``. Anything else is :func:`scene_from_args`.
+
+    Returns
+    -------
+    Scene or System
+
+    Raises
+    ------
+    CliError, SystemSpecError, SceneError
+        Bad input, one line each (exit code 2).
+    """
+    from chaospound.userfile import is_system_spec, load_system
+
+    path = args.scene_file
+    if not is_system_spec(path):
+        return scene_from_args(args)
+    if args.preset is not None:
+        raise CliError(f"give --preset {shorten(args.preset)} or the system {_path(path)}, "
+                       "not both")
+    if getattr(args, "phase", None) is not None:
+        raise CliError(f"--phase {shorten(args.phase)}: a system's sections are taken at "
+                       "t = k T (set its period instead)")
+    system = load_system(path)
+    overrides = [f"{name}={getattr(args, name)}" for name in RUN_OVERRIDES
+                 if getattr(args, name, None) is not None]
+    return _system_with_assignments(system, list(args.assignments) + overrides)
+
+
+def _system_with_assignments(system, assignments: Sequence[str]):
+    """A System with ``NAME=VALUE`` assignments applied in order (see target_from_args)."""
+    import dataclasses
+
+    from chaospound.solvers.tableaux import METHOD_NAMES
+
+    for text in assignments:
+        name, eq, value = (part.strip() for part in str(text).partition("="))
+        if not eq or not name:
+            raise CliError(f"--set {shorten(text, quote=True)}: expected NAME=VALUE")
+        if name in SYSTEM_SETTINGS:
+            try:
+                parsed = SYSTEM_SETTINGS[name](value)
+            except ValueError:
+                kind = {int: "an integer", float: "a number"}[SYSTEM_SETTINGS[name]]
+                raise CliError(f"--set {name}={shorten(value)}: not {kind}") from None
+            if name == "method" and parsed not in METHOD_NAMES:
+                raise CliError(f"--set method={shorten(value)}: need one of "
+                               f"{', '.join(METHOD_NAMES)}")
+            if isinstance(parsed, float) and not (math.isfinite(parsed) and parsed > 0.0):
+                raise CliError(f"--set {name}={shorten(value)}: need a finite number > 0")
+            if isinstance(parsed, int) and parsed < (1 if name != "transient" else 0):
+                raise CliError(f"--set {name}={shorten(value)}: too small")
+            system = dataclasses.replace(system, **{name: parsed})
+            continue
+        if name not in system.parameter_names:
+            known = ", ".join((*system.parameter_names, *SYSTEM_SETTINGS))
+            raise CliError(f"--set {shorten(name, quote=True)}: not a parameter of system "
+                           f"{shorten(system.name, quote=True)} (it has: {known})")
+        try:
+            number = float(value)
+        except ValueError:
+            raise CliError(f"--set {name}={shorten(value)}: not a number") from None
+        system = system.with_params(**{name: number})
+    return system
+
+
+def _is_system(target) -> bool:
+    from chaospound.scene import Scene
+
+    return not isinstance(target, Scene)
+
+
+def _system_header(system) -> list[tuple[str, str]]:
+    """The report header of a user's System: name, model, parameters, period, solver."""
+    values = ", ".join(f"{k} = {v:g}" for k, v in system.parameter_values.items())
+    where = f" ({system.origin})" if system.origin else ""
+    return [
+        ("system", f"{system.name}{where}"),
+        ("model", f"custom ({system.dim} states: {' '.join(system.state_names)})"
+                  + ("" if system.has_gap else ", no gap function")),
+        ("parameters", values or "-"),
+        ("period", f"T = {system.period:.6g}"),
+        ("solver", _solver_text(system)),
+    ]  # fmt: skip
+
+
+def _system_document(system) -> dict:
+    from chaospound.sweep import system_identity
+
+    return system_identity(system)
 
 
 #: the defaults named when a scene file sets no parameter
@@ -516,37 +629,49 @@ def _add_simulate(commands: argparse._SubParsersAction) -> None:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    scene = scene_from_args(args)
+    scene = target_from_args(args)
     if args.output is not None:
         check_output_path(args.output, overwrite=args.overwrite)
     if args.plot is not None:
         check_figure_path(args.plot)
         if args.output is not None and os.path.abspath(args.plot) == os.path.abspath(args.output):
             raise CliError(f"--plot {_path(args.plot)} is the --output file")
-    _load_kernels(args.quiet, engine=_engine_of(scene))
-    cycles = f"{scene.run.transient} transient + {scene.run.record} recorded cycles"
+    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
+    transient, record = ((scene.transient, scene.record) if _is_system(scene)
+                         else (scene.run.transient, scene.run.record))
+    cycles = f"{transient} transient + {record} recorded cycles"
     with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet) as status:
         sim = _run_simulation(scene, args.trajectory)
         if args.plot is not None:
             status.set(f"drawing {scene.name}'s time histories and phase diagrams")
-            _simulation_save_plot(sim, args.trajectory, args.plot)
+            _simulation_save_plot(sim, args.trajectory, args.plot,
+                                  scene if _is_system(scene) else None)
     document = _simulation_document(sim)
+    if _is_system(scene):
+        document["system"] = _system_document(scene)
     if args.output is not None:
         write_json_file(document, args.output, overwrite=args.overwrite)
     if args.json:
         _emit(_json_text(document))
     else:
-        _emit(_simulation_report(sim, args.trajectory, args.output, args.plot))
+        _emit(_simulation_report(sim, args.trajectory, args.output, args.plot,
+                                 scene if _is_system(scene) else None))
     return EXIT_OK
 
 
-def _simulation_save_plot(sim: Simulation, samples_per_cycle: int, path: str) -> None:
+def _simulation_save_plot(sim: Simulation, samples_per_cycle: int, path: str,
+                          system=None) -> None:
     """Time histories and phase diagrams of the run (rerun with dense samples unless the
-    run has at least :data:`PHASE_PLOT_SAMPLES` per cycle: the same steps, interpolated)."""
-    from chaospound.plot import plot_run
+    run has at least :data:`PHASE_PLOT_SAMPLES` per cycle: the same steps, interpolated);
+    the phase diagrams alone for a user's ``system``."""
+    from chaospound.plot import plot_phase_diagrams, plot_run
 
     if samples_per_cycle < PHASE_PLOT_SAMPLES:
-        sim = _run_simulation(sim.scene, PHASE_PLOT_SAMPLES)
+        sim = _run_simulation(sim.scene if sim.scene is not None else system,
+                              PHASE_PLOT_SAMPLES)
+    if sim.scene is None:  # a user's system: no contact model to draw, its phase diagrams
+        _save_figure(plot_phase_diagrams(sim), path)
+        return
     from chaospound.simulate import contact_history
 
     _save_figure(plot_run(sim, contact_history(sim)), path)
@@ -592,17 +717,23 @@ def _solver_text(solver) -> str:
 
 
 def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | None,
-                       plot: str | None = None) -> str:
-    """Header, impact table and summary of one run, as text."""
+                       plot: str | None = None, system=None) -> str:
+    """Header, impact table and summary of one run (of a scene, or of ``system``), as text."""
     scene, imp = sim.scene, sim.impacts
-    header = [
-        ("scene", _scene_title(scene)),
-        ("model", f"{sim.model} ({len(sim.state_names)} states: {' '.join(sim.state_names)})"),
-        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {sim.period:.6g})"),
-        ("cycles", f"{sim.transient} transient + {sim.record} recorded, "
-                   f"section phase {scene.run.phase:g}"),
-        ("solver", _solver_text(scene.solver)),
-    ]  # fmt: skip
+    if system is not None:
+        header = [*_system_header(system),
+                  ("cycles", f"{sim.transient} transient + {sim.record} recorded")]
+    else:
+        header = [
+            ("scene", _scene_title(scene)),
+            ("model", f"{sim.model} ({len(sim.state_names)} states: "
+                      f"{' '.join(sim.state_names)})"),
+            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} "
+                             f"(T = {sim.period:.6g})"),
+            ("cycles", f"{sim.transient} transient + {sim.record} recorded, "
+                       f"section phase {scene.run.phase:g}"),
+            ("solver", _solver_text(scene.solver)),
+        ]  # fmt: skip
     blocks = [_table(None, header, "ll")]
     if len(imp):
         rows = [
@@ -618,12 +749,14 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
             )
             for i, label in enumerate(imp.labels)
         ]
-        blocks.append(_table(IMPACT_COLUMNS, [IMPACT_UNITS, *rows], "rrrrlrrr"))
+        units = IMPACT_UNITS if system is None else ("", "", "of T", "", "", "", "", "")
+        blocks.append(_table(IMPACT_COLUMNS, [units, *rows], "rrrrlrrr"))
     else:
         blocks.append("no impacts in the record window")
     summary = _summary(sim, samples_per_cycle, output)
     if plot is not None:
-        summary.append(("wrote", f"{plot} (time histories and phase diagrams)"))
+        drawn = "phase diagrams" if system is not None else "time histories and phase diagrams"
+        summary.append(("wrote", f"{plot} ({drawn})"))
     blocks.append(_table(None, summary, "ll"))
     return "\n\n".join(blocks) + "\n"
 
@@ -936,8 +1069,8 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
     from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
     from chaospound.dynamics.system import System
 
-    scene = scene_from_args(args)
-    system = System.from_scene(scene)
+    scene = target_from_args(args)
+    system = scene if _is_system(scene) else System.from_scene(scene)
     if args.k is not None and not 1 <= args.k <= system.dim:
         raise CliError(
             f"--k {args.k}: must be between 1 and {system.dim} "
@@ -982,9 +1115,10 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
             )
         two_wall = time.perf_counter() - start
     if args.plot is not None:
-        _lyapunov_save_plot(spectrum, two, args.plot,
-                            f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
-                            f"{system.model_name} model")
+        title = (f"{system.name}, T = {system.period:.4g}, custom model" if system is scene
+                 else f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
+                 f"{system.model_name} model")
+        _lyapunov_save_plot(spectrum, two, args.plot, title)
     document = _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
     if args.json:
         _emit(_json_text(document))
@@ -1027,8 +1161,11 @@ def _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
         "trace": spectrum.trace,
         "kaplan_yorke": spectrum.kaplan_yorke,
         "work": {"steps": spectrum.steps, "rhs_evals": spectrum.rhs_evals, "wall_s": wall},
-        "scene": scene.to_dict(),
     }
+    if system is scene:
+        document["system"] = _system_document(system)
+    else:
+        document["scene"] = scene.to_dict()
     _with_units(document)
     if two is not None:
         document["two_trajectory"] = {
@@ -1047,14 +1184,20 @@ def _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
 
 def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) -> str:
     """Header, exponent table and summary of one Lyapunov run, as text."""
-    header = [
-        ("scene", _scene_title(scene)),
-        ("model", f"{system.model_name} ({system.dim} states: {' '.join(system.state_names)})"),
-        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {spectrum.period:.6g})"),
-        ("cycles", f"{spectrum.transient} transient + {spectrum.tangent_transient} tangent "
-                   f"transient + {spectrum.cycles} averaged ({document['blocks']} blocks)"),
-        ("solver", _solver_text(scene.solver)),
-    ]  # fmt: skip
+    cycles = (f"{spectrum.transient} transient + {spectrum.tangent_transient} tangent "
+              f"transient + {spectrum.cycles} averaged ({document['blocks']} blocks)")
+    if system is scene:
+        header = [*_system_header(system), ("cycles", cycles)]
+    else:
+        header = [
+            ("scene", _scene_title(scene)),
+            ("model", f"{system.model_name} ({system.dim} states: "
+                      f"{' '.join(system.state_names)})"),
+            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} "
+                             f"(T = {spectrum.period:.6g})"),
+            ("cycles", cycles),
+            ("solver", _solver_text(scene.solver)),
+        ]  # fmt: skip
     rows = [
         (
             str(i + 1),
@@ -1070,7 +1213,9 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
     ]  # fmt: skip
     columns = ("#", "lambda (per unit t)", "+-", "lambda T (per cycle)", "+-")
     total, trace = document["sum"], document["trace"]
-    if document["full_spectrum"]:
+    if trace is None or (isinstance(trace, float) and math.isnan(trace)):
+        identity = f"{total:.6g} (no trace identity: the Jacobian's trace is not known)"
+    elif document["full_spectrum"]:
         identity = f"{total:.6g} (trace identity {trace:.6g}, difference {total - trace:.2g})"
     else:
         identity = (
@@ -1157,8 +1302,9 @@ def _cmd_classify(args: argparse.Namespace) -> int:
 
     if args.record is not None:
         raise CliError(f"--record {args.record}: not used by classify (use --window N)")
-    scene = scene_from_args(args)
-    shortest = scene.run.transient
+    scene = target_from_args(args)
+    system = scene if _is_system(scene) else None
+    shortest = system.transient if system is not None else scene.run.transient
     if shortest < 1:
         raise CliError(f"--transient {shortest}: the shortest transient must be >= 1 cycle")
     if args.max_transient < shortest:
@@ -1170,7 +1316,7 @@ def _cmd_classify(args: argparse.Namespace) -> int:
         raise CliError(f"--max-period {args.max_period}: must be an integer >= 1")
     if args.plot is not None:
         check_figure_path(args.plot)
-    _load_kernels(args.quiet, engine=_engine_of(scene))
+    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
     with _Status(f"classifying {scene.name}", quiet=args.quiet) as status:
         regime = classify(
             scene,
@@ -1187,7 +1333,10 @@ def _cmd_classify(args: argparse.Namespace) -> int:
             _classify_save_plot(scene, regime, args.plot)
     document = regime.to_json_dict()
     document["model"] = regime.evidence.get("model")
-    document["scene"] = scene.to_dict()
+    if system is not None:
+        document["system"] = _system_document(system)
+    else:
+        document["scene"] = scene.to_dict()
     _with_units(document)
     if args.json:
         _emit(_json_text(document))
@@ -1202,8 +1351,10 @@ def _classify_save_plot(scene: Scene, regime, path: str) -> None:
     from chaospound.simulate import simulate
 
     rtol, atol = regime.evidence.get("rtol"), regime.evidence.get("atol")
-    if scene.solver.method != "rk4" and rtol is not None and math.isfinite(atol):
-        scene = scene.with_params(rtol=rtol, atol=atol)
+    method = scene.method if _is_system(scene) else scene.solver.method
+    if method != "rk4" and rtol is not None and math.isfinite(atol):
+        scene = (scene.with_solver(rtol=rtol, atol=atol) if _is_system(scene)
+                 else scene.with_params(rtol=rtol, atol=atol))
     record = max(2 * regime.period_cycles, 4) if regime.period_cycles else 8
     run = simulate(scene, transient=regime.transient_used, record=record,
                    samples_per_cycle=PHASE_PLOT_SAMPLES)
@@ -1232,15 +1383,23 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
             " per cycle"
         )
     zero_one = "-" if regime.zero_one is None else f"{regime.zero_one:.3f}"
+    solver = scene if _is_system(scene) else scene.solver
     accuracy = (
-        f"{scene.solver.steps_per_cycle} steps per cycle"
-        if scene.solver.method == "rk4"
+        f"{solver.steps_per_cycle} steps per cycle"
+        if solver.method == "rk4"
         else f"rtol {evidence.get('rtol'):g}, atol {evidence.get('atol'):g}"
     )
+    if _is_system(scene):
+        head = [row for row in _system_header(scene) if row[0] != "solver"]
+    else:
+        head = [
+            ("scene", _scene_title(scene)),
+            ("model", str(evidence.get("model"))),
+            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} "
+                             f"(T = {scene.period:.6g})"),
+        ]  # fmt: skip
     rows = [
-        ("scene", _scene_title(scene)),
-        ("model", str(evidence.get("model"))),
-        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {scene.period:.6g})"),
+        *head,
         ("regime", regime.label),
         ("period", period),
         ("impacts per period", impacts),
@@ -1252,7 +1411,7 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
         ("confidence", f"{regime.confidence:.2f}"),
         ("transient used", f"{regime.transient_used} cycles, then a {evidence.get('window_cycles')}"
                            "-cycle window"),
-        ("solver", f"{scene.solver.method}, {accuracy}"),
+        ("solver", f"{solver.method}, {accuracy}"),
         ("wall time", f"{_command_seconds():.3g} s the whole command"),
     ]  # fmt: skip
     if plot is not None:
@@ -1353,9 +1512,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         raise CliError("give --resume or --overwrite, not both")
     if args.chunk is not None and args.chunk < 1:
         raise CliError(f"--chunk {args.chunk}: must be an integer >= 1")
-    scene = scene_from_args(args)
+    scene = target_from_args(args)
     if args.params:
         axes = parse_axes(args.params, scene)
+    elif _is_system(scene):
+        raise CliError(f"nothing to sweep: give --param NAME=GRID (system "
+                       f"{shorten(scene.name, quote=True)} has: "
+                       f"{', '.join(scene.parameter_names) or 'no named parameters'})")
     elif scene.sweep:
         try:
             axes = axes_from_scene(scene)
@@ -1376,7 +1539,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         window_tol=args.window_tol,
     )
     _check_sweep_output(args.output, resume=args.resume, overwrite=args.overwrite)
-    note_sweep_overrides(args, scene)  # after every check: bad input stays one line
+    note_sweep_overrides(args, None if _is_system(scene) else scene)  # after every check
     from chaospound.distributed import ClusterUnavailable, connect, disconnect
 
     client = cluster = None
@@ -1796,7 +1959,9 @@ def _regime_map(ax, sweep, branch: str) -> None:
 
 
 def _scene_name(sweep) -> str:
-    """The scene's name, from the resolved scene stored in the file."""
+    """The scene's name, from the resolved scene stored in the file (a system's name)."""
+    if "system" in sweep.meta and "name" in sweep.meta:
+        return str(sweep.meta["name"])
     try:
         return str(json.loads(sweep.meta["scene_resolved"])["name"])
     except (KeyError, TypeError, ValueError):
@@ -1891,10 +2056,22 @@ def _load_kernels(quiet: bool, warm=None, engine=None) -> None:
 
 
 def _engine_of(scene):
-    """The engine a scene's runs use (its composition's)."""
+    """The engine a scene's (or a System's) runs use (its composition's)."""
     from chaospound.dynamics.system import System
 
-    return System.from_scene(scene).engine()
+    return (scene if isinstance(scene, System) else System.from_scene(scene)).engine()
+
+
+def _system_warm(target):
+    """The call that loads a user System's engine (one period), or None for a scene."""
+    if not _is_system(target):
+        return None
+
+    def warm() -> None:
+        from chaospound.dynamics.system import advance
+
+        advance(target, target.initial_state, 1, from_time_zero=True)
+    return warm
 
 
 def _orbit_warm(smap):

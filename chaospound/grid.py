@@ -16,7 +16,9 @@ of values (see :func:`parse_axis`). This is the edge where user input (the
   message;
 * every grid value is valid for the scene before anything is written (see
   :func:`check_axis` for why the check is complete without building a
-  scene per value);
+  scene per value); for a user's System (:func:`chaospound.custom_system`) the
+  names are its named parameters and the values are checked by
+  ``System.with_params``;
 * every message is one line and quotes at most about 80 characters of the
   user's text (:func:`chaospound.messages.shorten`).
 
@@ -72,13 +74,27 @@ class Axis:
         return int(self.values.shape[0])
 
 
+def _target(scene):
+    """A Scene, a user's System, or None: a System made from a scene is its scene."""
+    from .dynamics.system import System
+
+    if isinstance(scene, System) and scene.scene is not None:
+        return scene.scene
+    return scene
+
+
+def _is_system(target) -> bool:
+    return target is not None and not isinstance(target, Scene)
+
+
 def parse_axis(text: str, scene: Scene | None = None) -> Axis:
     """Parse ``name=GRID`` where GRID is ``start:stop:step``, ``start:stop#count``
     or a comma-separated list of values.
 
     ``start:stop:step`` includes ``stop`` when it lies on the grid (to within
     1e-9 of a step); ``start:stop#count`` is ``numpy.linspace(start, stop, count)``.
-    With a ``scene`` every value is checked against it (:func:`check_axis`).
+    With a ``scene`` (or a System) every value is checked against it
+    (:func:`check_axis`).
     """
     text = str(text)
     if "=" not in text:
@@ -91,7 +107,18 @@ def parse_axis(text: str, scene: Scene | None = None) -> Axis:
 def make_axis(name: str, grid: str, scene: Scene | None = None) -> Axis:
     """An Axis from a parameter name and a grid string (see :func:`parse_axis`)."""
     name, grid = str(name), str(grid).strip()
-    if name not in PARAMETERS and name not in SHORTHANDS:
+    scene = _target(scene)
+    if _is_system(scene):
+        known = scene.parameter_names
+        if name not in known:
+            import difflib
+
+            close = difflib.get_close_matches(name, list(known), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            listed = ", ".join(known) if known else "none"
+            raise ValueError(f"unknown sweep parameter {shorten(name, quote=True)}{hint}; "
+                             f"system {shorten(scene.name, quote=True)} has: {listed}")
+    elif name not in PARAMETERS and name not in SHORTHANDS:
         import difflib
 
         # the cutoff makes difflib skip long names after an O(1) length test
@@ -270,6 +297,7 @@ def check_axis(scene: Scene, axis: Axis) -> None:
     anyway, in grid order, so the first bad value is the one reported;
     tests/test_input_limits.py compares the two ways.
     """
+    scene = _target(scene)
     bad = _first_invalid(scene, axis.name, axis.values)
     if bad is not None:
         value, exc = bad
@@ -282,11 +310,12 @@ def check_axis(scene: Scene, axis: Axis) -> None:
 def _first_invalid(scene: Scene, name: str, values: np.ndarray,
                    exhaustive: int = EXHAUSTIVE_CHECK) -> tuple[float, SceneError] | None:
     """The first value (of the values tried, see :func:`check_axis`) that makes an
-    invalid scene, with the scene's error; None if there is none."""
+    invalid scene (or System), with its error; None if there is none."""
+    refused = ValueError if _is_system(scene) else SceneError
     for value in _candidates(values, exhaustive):
         try:
             scene.with_params(**{name: value})
-        except SceneError as exc:
+        except refused as exc:
             return value, exc
     return None
 
@@ -313,6 +342,7 @@ def check_axes(scene: Scene, axes: Sequence[Axis]) -> None:
     are: the corners are checked, or every pair of distinct values when there are
     at most :data:`EXHAUSTIVE_CHECK` of them.
     """
+    scene = _target(scene)
     for axis in axes:
         check_axis(scene, axis)
     if len(axes) != 2 or axes[0].name == axes[1].name:
@@ -321,17 +351,20 @@ def check_axes(scene: Scene, axes: Sequence[Axis]) -> None:
     values = [_candidates(a.values, EXHAUSTIVE_CHECK) for a in axes]
     if len(values[0]) * len(values[1]) > EXHAUSTIVE_CHECK:
         values = [[float(a.values.min()), float(a.values.max())] for a in axes]
+    refused = ValueError if _is_system(scene) else SceneError
     for x, y in itertools.product(*values):
         try:
             scene.with_params(**{first.name: x, second.name: y})
-        except SceneError as exc:
+        except refused as exc:
             raise ValueError(f"sweep {first.name}={x!r} with {second.name}={y!r}: "
                              f"{exc}") from None
 
 
 def parse_axes(texts: Iterable[str], scene: Scene) -> list[Axis]:
-    """Axes from ``--param`` texts, every grid point checked against ``scene``."""
-    axes = [parse_axis(t) for t in texts]
+    """Axes from ``--param`` texts, every grid point checked against ``scene`` (a Scene
+    or a System)."""
+    scene = _target(scene)
+    axes = [parse_axis(t, scene) if _is_system(scene) else parse_axis(t) for t in texts]
     check_axes(scene, axes)
     return axes
 

@@ -187,8 +187,10 @@ def plot_phase_diagrams(simulation: Simulation, *, fig: Figure | None = None) ->
         _style_panel(ax, title, position, rate)
     axes[0].legend(loc="upper left", fontsize="small", frameon=False)
     scene = simulation.scene
+    forcing = (f"$T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}" if scene is not None
+               else f"T = {simulation.period:.4g}")  # a user's system: its own period
     fig.suptitle(
-        f"{scene.name}: $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
+        f"{scene.name if scene is not None else simulation.name}: {forcing}, "
         f"{simulation.model} model, cycles {simulation.transient}-{last_cycle}"
     )
     if numbered.size:

@@ -6,6 +6,11 @@ import it from here, and the sweep engine above them decides which points go
 into which task. ``spec`` is a :class:`chaospound.sweep.SweepSpec` (its
 ``point_values``, ``lyapunov``, ``lyapunov_cycles``, ``classify`` and
 ``window_tol``).
+
+The target of a task is a :class:`~chaospound.scene.Scene` or a user's
+:class:`~chaospound.dynamics.system.System` (:func:`run_system_point`): the
+same steady run, classification and exponents, each point made by
+``system.with_params`` of its grid values.
 """
 
 from __future__ import annotations
@@ -18,16 +23,21 @@ import numpy as np
 from .scene import Scene, SceneError
 from .store import PointResult
 
-__all__ = ["run_point", "run_task"]
+__all__ = ["run_point", "run_system_point", "run_task"]
 
 
-def run_task(scene: Scene, spec, indices: Sequence[int],
+def run_task(scene, spec, indices: Sequence[int],
              start_state: np.ndarray | None, continuation: bool) -> list[PointResult]:
-    """Run grid points in order; with continuation each starts from the previous one."""
+    """Run grid points in order; with continuation each starts from the previous one.
+
+    ``scene`` is a Scene (:func:`run_point`) or a custom System
+    (:func:`run_system_point`).
+    """
     results = []
     state = start_state
+    runner = run_point if isinstance(scene, Scene) else run_system_point
     for index in indices:
-        result = run_point(scene, spec, int(index), state if continuation else None)
+        result = runner(scene, spec, int(index), state if continuation else None)
         results.append(result)
         if continuation:
             state = result.final_state if result.status == 1 else None
@@ -93,6 +103,90 @@ def run_point(scene: Scene, spec, index: int,
     except (SimulationError, SceneError, ValueError, FloatingPointError, ZeroDivisionError,
             OverflowError) as exc:
         return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
+
+
+def run_system_point(system, spec, index: int,
+                     start_state: np.ndarray | None = None) -> PointResult:
+    """:func:`run_point` for a user's System, swept over its named parameters.
+
+    The point is ``system.with_params(**values)``, run for the system's transient
+    and record windows. Its regime comes from the record window (or the
+    adaptive classifier with ``spec.classify == "full"``) with every state
+    component weighted equally, as :func:`chaospound.dynamics.classify.classify`
+    does for custom systems; a system without a gap function has no impacts to
+    classify: its points are stored "unresolved", with their sections, exponents
+    and statistics.
+    """
+    from .dynamics.classify import classify, classify_sequence
+    from .dynamics.lyapunov import lyapunov_spectrum
+    from .simulate import SimulationError, simulate
+
+    started = time.perf_counter()
+    n_state = system.dim
+    n_exp = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
+    try:
+        point = system.with_params(**spec.point_values(index))
+        sim = simulate(point, initial_state=start_state,
+                       start_at_section=start_state is not None)
+        exps = errs = None
+        max_exp = max_err = None
+        if n_exp:
+            spectrum = lyapunov_spectrum(point, k=n_exp, transient=0,
+                                         initial_state=sim.strobe.state[-1],
+                                         cycles=spec.lyapunov_cycles, tangent_transient=10)
+            exps, errs = spectrum.exponents, spectrum.errors
+            max_exp, max_err = float(exps[0]), float(errs[0])
+        imp = sim.impacts
+        transient_used = sim.transient
+        if not point.has_gap:
+            regime = _Unclassified(float("nan"))
+        elif spec.classify == "full":
+            regime = classify(point)
+            if exps is None and regime.max_exponent is not None:
+                max_exp, max_err = regime.max_exponent, regime.max_exponent_error
+            transient_used = regime.transient_used
+        else:
+            regime = classify_sequence(
+                sim.strobe.state, imp.cycle, imp.phase, imp.velocity, imp.labels,
+                max_period=max(1, sim.record // 2), tol=spec.window_tol,
+                exponent=None if exps is None else float(exps[0]),
+                exponent_error=None if errs is None else float(errs[0]),
+            )
+        stats = sim.stats
+        return PointResult(
+            index=index, status=1, message="", regime=regime.regime,
+            impacts_per_period=_int_or(regime.impacts_per_period),
+            period_cycles=_int_or(regime.period_cycles),
+            strobe_mismatch=float(regime.strobe_mismatch),
+            zero_one=_float_or(regime.zero_one),
+            max_exponent=_float_or(max_exp), max_exponent_error=_float_or(max_err),
+            transient_used=int(transient_used),
+            corner_sequence=" ".join(regime.corner_sequence),
+            exponents=exps, final_state=sim.strobe.state[-1].copy(),
+            steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
+            wall_s=time.perf_counter() - started,
+            impacts={"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
+                     "corner": imp.corner.astype(np.int8),
+                     "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
+                     "duration": imp.duration},
+            strobe=sim.strobe.state,
+        )
+    except (SimulationError, ValueError, FloatingPointError, ZeroDivisionError,
+            OverflowError) as exc:
+        return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
+
+
+class _Unclassified:
+    """The regime fields of a point that cannot be classified (no gap function)."""
+
+    regime = "unresolved"
+    impacts_per_period = None
+    period_cycles = None
+    zero_one = None
+    corner_sequence = ()
+
+    def __init__(self, strobe_mismatch: float) -> None:
+        self.strobe_mismatch = strobe_mismatch
 
 
 def _failed_point(index: int, n_state: int, message: str, started: float) -> PointResult:

@@ -235,7 +235,7 @@ class _SceneRun:
                    p=system.params, initial_state=np.asarray(system.initial_state, float),
                    state_names=tuple(system.state_names), solver=system,
                    period=system.period, t0=float(system.params[P_PHASE0]),
-                   transient=system.transient, record=8, name=system.name,
+                   transient=system.transient, record=system.record, name=system.name,
                    engine=system.engine())
 
 

@@ -25,6 +25,10 @@ Schema of the finished file (format "chaospound-sweep", version 1)::
                                      scene (TOML), scene_resolved (JSON), sweep (JSON),
                                      units (JSON), model, state_names (JSON),
                                      created, wall_s (timing fields)
+                              a user's System instead of a scene (model "custom"):
+                                     system (JSON: its identity), name, source
+                                     (module:attr), source_sha256, parameter_names,
+                                     parameter_values (JSON), classified
     /grid/<name>              values of each swept parameter (1 or 2 axes, in order)
     /<branch>/                "fresh", or "forward" / "backward" (continuation)
         order                 (N,) grid indices in the branch's visiting order
@@ -508,7 +512,7 @@ class SweepFile:
         try:
             scene = json.loads(self.meta["scene_resolved"]).get("name", "?")
         except (KeyError, TypeError, ValueError):
-            scene = "?"
+            scene = self.meta.get("name", "?")
         axes = ", ".join(f"{p} {self.grid[p][0]:g}..{self.grid[p][-1]:g} "
                          f"({len(self.grid[p])})" for p in self.parameters)
         lines = [f"<chaospound sweep {self.path.name}{' (live journal)' if self.live else ''}: "
@@ -863,6 +867,9 @@ def _short(exc: Exception) -> str:
 
 
 def _check_same_sweep(stored: dict, path, meta) -> None:
+    if "system" in meta or "system" in stored:
+        _check_same_system(stored, path, meta)
+        return
     try:  # the same code wrote both: equal text (parsing 1e5 grid values costs memory)
         same = stored["scene"] == meta["scene"] and (
             stored["sweep"] == meta["sweep"]
@@ -873,6 +880,34 @@ def _check_same_sweep(stored: dict, path, meta) -> None:
         raise SweepStoreError(
             f"{path}: holds a different sweep or scene; resume needs the same definition "
             "(use --overwrite to start again)")
+
+
+def _check_same_system(stored: dict, path, meta) -> None:
+    """A sweep of a user's System resumes only the same system (its ``system`` attribute:
+    source file's sha256, ``module:attr``, parameters, states, solver) and sweep."""
+    if "system" not in stored:
+        raise SweepStoreError(f"{path}: holds a sweep of a scene, not of a system; resume "
+                              "needs the same system (use --overwrite to start again)")
+    if "system" not in meta:
+        raise SweepStoreError(f"{path}: holds a sweep of a system, not of a scene; resume "
+                              "needs the same scene (use --overwrite to start again)")
+    try:
+        was, now = json.loads(stored["system"]), json.loads(meta["system"])
+        same_sweep = (stored["sweep"] == meta["sweep"]
+                      or json.loads(stored["sweep"]) == json.loads(meta["sweep"]))
+    except (KeyError, TypeError, ValueError):
+        was, now, same_sweep = {}, {"?": 1}, False
+    if was != now:
+        keys = [k for k in dict.fromkeys([*now, *was]) if was.get(k) != now.get(k)]
+        key = keys[0]
+        raise SweepStoreError(
+            f"{path}: holds a sweep of a different system ({key}: "
+            f"{shorten(json.dumps(was.get(key)), 60)} in the file, "
+            f"{shorten(json.dumps(now.get(key)), 60)} now); resume needs the same system "
+            "(use --overwrite to start again)")
+    if not same_sweep:
+        raise SweepStoreError(f"{path}: holds a different sweep of this system; resume needs "
+                              "the same definition (use --overwrite to start again)")
 
 
 def _remove_temporaries(path: Path) -> None:

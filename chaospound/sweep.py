@@ -1,9 +1,11 @@
-"""Batch bifurcation scans over one or two scene parameters, stored in HDF5.
+"""Batch bifurcation scans over one or two parameters of a scene or a System, in HDF5.
 
 A sweep is a grid over one or two parameters of a scene (``period_ratio``,
-``gap``, ``ecc_y_A``, ``beta``, ...). Every grid point is run to steady state
-(the scene's transient and record windows), its impacts, stroboscopic points
-and regime are stored, optionally with Lyapunov exponents.
+``gap``, ``ecc_y_A``, ``beta``, ...), or over the named parameters of a user's
+own system (:func:`chaospound.custom_system` with ``params={"zeta": ...}``).
+Every grid point is run to steady state (the scene's or system's transient and
+record windows), its impacts, stroboscopic points and regime are stored,
+optionally with Lyapunov exponents.
 
 Branches and chains
     Without continuation every point starts from the scene's initial state
@@ -46,6 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import __version__
+from .dynamics.system import System
 from .grid import (  # noqa: F401 - re-exported: the grid parsing lives in chaospound.grid
     MAX_POINTS,
     Axis,
@@ -207,6 +210,7 @@ class SweepSummary:
     messages: list[str] = field(default_factory=list)
     stored: int = 0  #: points in the file, from this and earlier runs
     finished_before: bool = False  #: resume found the file finished
+    notes: list[str] = field(default_factory=list)  #: said once, e.g. regimes not classified
 
     @property
     def points_per_second(self) -> float:
@@ -226,6 +230,7 @@ class SweepSummary:
             f"regimes: {counts or 'none'}; failed: {self.failed}",
         ]
         lines += [f"  failed: {m}" for m in self.messages[:5]]
+        lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 
 
@@ -233,7 +238,7 @@ class SweepSummary:
 
 
 def run_sweep(
-    scene: Scene,
+    system: Scene | System,
     spec: SweepSpec,
     path,
     *,
@@ -248,8 +253,11 @@ def run_sweep(
 
     Parameters
     ----------
-    scene : Scene
-        The base scene; each point overrides the swept parameters.
+    system : Scene or System
+        The base scene, or a System: a user's own (:func:`chaospound.custom_system`),
+        swept over its named parameters (``System.with_params``), or one made
+        from a scene (its scene is swept, with the system's solver settings).
+        Each point overrides the swept parameters.
     spec : SweepSpec
         Axes, continuation and Lyapunov settings.
     path : str or Path
@@ -278,22 +286,33 @@ def run_sweep(
     """
     if workers < 1:
         raise ValueError(f"workers = {workers}: must be >= 1")
-    model_id = scene.model_id()
-    n_state = len(scene.initial_vector(model_id))
+    scene = sweep_target(system)
+    notes: list[str] = []
+    if isinstance(scene, Scene):
+        model_id = scene.model_id()
+        n_state = len(scene.initial_vector(model_id))
+        model_name = scene.model_name
+        from .scene import STATE_NAMES
+
+        meta = {
+            "chaospound_version": __version__,
+            "scene": scene.to_toml(),
+            "scene_resolved": json.dumps(scene.to_dict()),
+            "sweep": spec.to_json(),
+            "model": scene.model_name,
+            "state_names": json.dumps(list(STATE_NAMES[model_id])),
+        }
+    else:
+        n_state, model_name = scene.dim, "custom"
+        meta = system_metadata(scene, spec)
+        if not scene.has_gap:
+            notes.append(f"system {scene.name!r} has no gap function: its points cannot be "
+                         "classified (stored 'unresolved'); their sections, impacts and "
+                         "statistics are stored")
     n_exponents = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
     if n_exponents > n_state:
-        raise ValueError(f"--lyapunov {spec.lyapunov}: the {scene.model_name} model has only "
+        raise ValueError(f"--lyapunov {spec.lyapunov}: the {model_name} model has only "
                          f"{n_state} exponents")
-    from .scene import STATE_NAMES
-
-    meta = {
-        "chaospound_version": __version__,
-        "scene": scene.to_toml(),
-        "scene_resolved": json.dumps(scene.to_dict()),
-        "sweep": spec.to_json(),
-        "model": scene.model_name,
-        "state_names": json.dumps(list(STATE_NAMES[model_id])),
-    }
     grid = {a.name: a.values for a in spec.axes}
     orders = {b: spec.order(b) for b in spec.branches}
     if chunk is None and client is not None:  # sized from the cluster's threads
@@ -330,7 +349,78 @@ def run_sweep(
         backend.close()
     summary.wall_s = time.perf_counter() - started
     summary.workers = backend.workers
+    summary.notes = notes
     return summary
+
+
+def sweep_target(system: Scene | System) -> Scene | System:
+    """What the workers run: a Scene, or a user's System.
+
+    A System made from a scene is its scene with the system's solver and run
+    settings (those that differ), so that it is stored and resumed as a scene.
+    """
+    if isinstance(system, Scene):
+        return system
+    if not isinstance(system, System):
+        raise TypeError(f"run_sweep needs a Scene or a System, got {type(system).__name__}")
+    if system.scene is None:
+        if not system.is_custom:
+            raise ValueError(f"system {system.name!r} has no named parameters to sweep: use a "
+                             "scene or a custom_system with params={...}")
+        return system
+    flat = system.scene.to_dict()
+    changed = {k: getattr(system, k) for k in ("method", "rtol", "atol", "steps_per_cycle",
+                                                "max_steps", "restart_at_kinks", "transient",
+                                                "record")
+               if getattr(system, k) != flat[k]}
+    return system.scene.with_params(**changed) if changed else system.scene
+
+
+def system_identity(system: System) -> dict:
+    """What identifies a user's System in a sweep store (the resume check compares it)."""
+    user = system.user
+    source = system.origin
+    if not source and user is not None:
+        source = f"{user.module or '__main__'}:{user.names[0]}"
+    return {
+        "model": "custom",
+        "name": system.name,
+        "source": source,
+        "source_sha256": system.source_digest(),
+        "functions": list(user.names) if user is not None else [],
+        "has_gap": system.has_gap,
+        "state_names": list(system.state_names),
+        "initial_state": [float(v) for v in system.initial_state],
+        "parameter_names": list(system.parameter_names),
+        "parameter_values": system.parameter_values,
+        "period": system.period,
+        "transient": system.transient,
+        "record": system.record,
+        "method": system.method,
+        "rtol": system.rtol,
+        "atol": system.atol,
+        "steps_per_cycle": system.steps_per_cycle,
+        "max_steps": system.max_steps,
+        "restart_at_kinks": system.restart_at_kinks,
+    }
+
+
+def system_metadata(system: System, spec: SweepSpec) -> dict:
+    """Root attributes of a sweep of a user's System (docs/store.md)."""
+    identity = system_identity(system)
+    return {
+        "chaospound_version": __version__,
+        "system": json.dumps(identity),
+        "sweep": spec.to_json(),
+        "model": "custom",
+        "name": system.name,
+        "state_names": json.dumps(list(system.state_names)),
+        "parameter_names": json.dumps(identity["parameter_names"]),
+        "parameter_values": json.dumps(identity["parameter_values"]),
+        "source": identity["source"],
+        "source_sha256": identity["source_sha256"],
+        "classified": "yes" if system.has_gap else "no (no gap function)",
+    }
 
 
 # ---------------------------------------------------------------- scheduling

@@ -12,7 +12,10 @@ engine (Lorenz, the Ueda-Duffing oscillator) are built by :func:`lorenz` and
 
 from __future__ import annotations
 
+import hashlib
+import inspect
 import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -35,7 +38,7 @@ from ..kernels.params import (
     REF_4,
     SYSTEM_NAMES,
 )
-from ..scene import STATE_NAMES, Scene
+from ..scene import PARAMETERS, STATE_NAMES, Scene
 from ..solvers.tableaux import METHOD_NAMES
 
 __all__ = ["SimulationError", "System", "advance", "custom_system", "duffing", "lorenz",
@@ -78,6 +81,17 @@ class System:
         The contact law (a key of :data:`chaospound.engine.compose.LAWS`).
     user : UserFunctions or None
         A custom system's functions.
+    record : int
+        Default record window, in periods (a scene's: its own).
+    names : tuple of str
+        Names of a custom system's parameters, in the order of ``q``
+        (:attr:`parameter_names`).
+    period_of : callable or None
+        A custom system's period as a function of its named parameters
+        (a mapping name -> value), re-evaluated by :meth:`with_params`.
+    origin : str
+        Where the system was defined, e.g. ``my_oscillator.py:system`` (set by
+        :func:`load_system`); part of a sweep store's identity of the system.
     """
 
     name: str
@@ -98,6 +112,11 @@ class System:
     ground: str = "sine"
     law: str = "hertz"
     user: UserFunctions | None = field(default=None, compare=False, repr=False)
+    record: int = 8
+    names: tuple[str, ...] = ()
+    period_of: Callable[[Mapping[str, float]], float] | None = field(
+        default=None, compare=False, repr=False)
+    origin: str = field(default="", compare=False)
 
     @classmethod
     def from_scene(cls, scene: Scene) -> System:
@@ -118,6 +137,7 @@ class System:
             max_steps=solver.max_steps,
             restart_at_kinks=solver.restart_at_kinks,
             transient=scene.run.transient,
+            record=scene.run.record,
             scene=scene,
             ground=scene.excitation.ground,
             law=scene.contact.contact_law,
@@ -151,6 +171,113 @@ class System:
     def with_solver(self, **settings) -> System:
         """A copy with other solver settings (method, rtol, atol, ...)."""
         return replace(self, **settings)
+
+    @property
+    def is_custom(self) -> bool:
+        """A user's own system (:func:`custom_system`)."""
+        return self.model_id == CUSTOM
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """The names :meth:`with_params` accepts: a custom system's named parameters
+        (``q0, q1, ...`` when they were given as a sequence), a scene's numeric flat
+        parameters (``chaospound params``); none for the reference oscillators."""
+        if self.scene is not None:
+            flat = self.scene.to_dict()
+            return tuple(k for k in PARAMETERS if _is_number(flat.get(k)))
+        return self.names
+
+    @property
+    def parameter_values(self) -> dict[str, float]:
+        """Name -> value of every parameter in :attr:`parameter_names`."""
+        if self.scene is not None:
+            flat = self.scene.to_dict()
+            return {k: float(flat[k]) for k in self.parameter_names}
+        q = self.params[N_PARAMS:N_PARAMS + len(self.names)]
+        return {k: float(v) for k, v in zip(self.names, q, strict=True)}
+
+    def with_params(self, **values: float) -> System:
+        """A copy with some named parameters replaced.
+
+        Parameters
+        ----------
+        **values : float
+            Named parameters (:attr:`parameter_names`). A custom system gets
+            the entries of its ``q`` replaced (and its period re-evaluated when
+            it was given as a function of them); a system made from a scene is
+            rebuilt from ``scene.with_params(**values)``, keeping this system's
+            solver settings (those not among ``values``).
+
+        Returns
+        -------
+        System
+
+        Raises
+        ------
+        ValueError
+            An unknown name (the message lists the valid ones), a non-finite
+            value, or a value the scene refuses.
+        """
+        if self.scene is not None:
+            rebuilt = System.from_scene(self.scene.with_params(**values))
+            kept = {k: getattr(self, k) for k in SOLVER_SETTINGS if k not in values}
+            return replace(rebuilt, **kept)
+        if not self.names:
+            raise ValueError(f"system {self.name!r} has no named parameters")
+        p = self.params.copy()
+        for name, value in values.items():
+            if name not in self.names:
+                raise ValueError(f"unknown parameter {name!r} of system {self.name!r}; "
+                                 f"its parameters are: {', '.join(self.names)}")
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"{name} = {value!r}: need a number") from None
+            if not math.isfinite(number):
+                raise ValueError(f"{name} = {number}: need a finite number")
+            p[N_PARAMS + self.names.index(name)] = number
+        period = self.period
+        if self.period_of is not None:
+            q = p[N_PARAMS:N_PARAMS + len(self.names)]
+            period = _period_value(self.period_of, dict(zip(self.names, q.tolist(),
+                                                            strict=True)))
+            p[P_PERIOD] = period
+            p[P_PERIOD_RATIO] = period / (2.0 * np.pi)
+        return replace(self, params=p, period=period)
+
+    def source_digest(self) -> str:
+        """sha256 of the file defining a custom system's functions ('' if unknown)."""
+        if self.user is None:
+            return ""
+        if self.user.digest:
+            return self.user.digest
+        try:  # functions defined in __main__ or a notebook: hash their source
+            text = "".join(inspect.getsource(getattr(f, "py_func", f))
+                           for f in (self.user.rhs, self.user.jacobian, self.user.gap)
+                           if f is not None)
+        except (OSError, TypeError):
+            return ""
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+#: the settings :meth:`System.with_params` keeps from the system it starts from
+SOLVER_SETTINGS = ("method", "rtol", "atol", "steps_per_cycle", "max_steps",
+                   "restart_at_kinks", "transient", "record")
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _period_value(period_of, values: Mapping[str, float]) -> float:
+    """The period a custom system's function gives for ``values``, checked."""
+    try:
+        period = float(period_of(values))
+    except Exception as exc:  # the user's function: say which values broke it
+        raise ValueError(f"period({values}) failed: {exc}") from None
+    if not (math.isfinite(period) and period > 0.0):
+        raise ValueError(f"period = {period} for {values}: need a finite number > 0")
+    return period
 
 
 def as_system(obj: System | Scene) -> System:
@@ -192,8 +319,10 @@ def duffing(damping: float = 0.05, linear: float = 0.0, cubic: float = 1.0,
                   state_names=("x", "dx"), transient=100, ground="none", **solver)
 
 
-def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
-                  params=(), state_names=None, name: str = "custom", transient: int = 40,
+def custom_system(rhs, jacobian, gap=None, *,
+                  period: float | Callable[[Mapping[str, float]], float], initial_state,
+                  params: Mapping[str, float] | Sequence[float] = (), state_names=None,
+                  name: str = "custom", transient: int = 40, record: int = 8,
                   **solver) -> System:
     """A user's own jitted oscillator as a :class:`System` every analysis accepts.
 
@@ -208,20 +337,25 @@ def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
         Distance to contact and its rate: an impact is an onset of ``g < 0``,
         located on the dense output and landed on like the towers' contacts;
         its velocity is ``-dg/dt``.
-    period : float
+    period : float or callable
         Sampling period T: the forcing period of a forced system (sections are
         taken every T from t = 0), the re-orthonormalisation interval of an
-        autonomous one.
+        autonomous one. A function of the named parameters (called with a
+        mapping name -> value, e.g. ``lambda q: 2 * math.pi * q["r"]``) when
+        the period follows a parameter, so that sweeping it moves the sections.
     initial_state : sequence of float
         State at t = 0; its length is the dimension n.
-    params : sequence of float
-        The vector ``q`` handed to the three functions.
+    params : mapping of str to float, or sequence of float
+        The vector ``q`` handed to the three functions: a mapping names its
+        entries (in its order: ``{"zeta": 0.03, "gap": 1.0}`` is ``q[0]``,
+        ``q[1]``), which :meth:`System.with_params`, sweeps and ``--set`` use;
+        a plain sequence is named ``q0, q1, ...``.
     state_names : sequence of str, optional
         Labels of the state components (default y0, y1, ...).
     name : str
         Label for reports.
-    transient : int
-        Default transient, in periods.
+    transient, record : int
+        Default transient and record window, in periods.
     **solver
         method, rtol, atol, steps_per_cycle, max_steps, restart_at_kinks, as in
         :class:`System`.
@@ -247,25 +381,40 @@ def custom_system(rhs, jacobian, gap=None, *, period: float, initial_state,
         if fn is not None and not isinstance(fn, CPUDispatcher):
             raise ValueError(f"{label} must be a numba.njit function, got {type(fn).__name__}")
     y0 = np.array(initial_state, dtype=np.float64).ravel()
-    q = np.array(params, dtype=np.float64).ravel()
+    if isinstance(params, Mapping):
+        names = tuple(str(k) for k in params)
+        for key in names:
+            if not key.isidentifier():
+                raise ValueError(f"parameter name {key!r}: need an identifier")
+        q = np.array([params[k] for k in params], dtype=np.float64).ravel()
+    else:
+        q = np.array(params, dtype=np.float64).ravel()
+        names = tuple(f"q{i}" for i in range(q.size))
     if y0.size == 0 or not np.all(np.isfinite(y0)):
         raise ValueError(f"initial_state = {list(y0)}: need at least one finite number")
     if not np.all(np.isfinite(q)):
         raise ValueError(f"params = {list(q)}: need finite numbers")
+    period_of = period if callable(period) else None
+    if period_of is not None:
+        period = _period_value(period_of, dict(zip(names, q.tolist(), strict=True)))
     if not (math.isfinite(period) and period > 0.0):
         raise ValueError(f"period = {period}: need a finite number > 0")
+    if int(transient) < 0 or int(record) < 1:
+        raise ValueError(f"transient = {transient}, record = {record}: need >= 0 and >= 1")
     method = solver.get("method", "dopri5")
     if method not in METHOD_NAMES:
         raise ValueError(f"method = {method!r}: need one of {', '.join(METHOD_NAMES)}")
     n = y0.size
-    names = tuple(state_names) if state_names is not None else tuple(f"y{i}" for i in range(n))
-    if len(names) != n:
-        raise ValueError(f"state_names has {len(names)} names for {n} states")
+    labels = (tuple(state_names) if state_names is not None
+              else tuple(f"y{i}" for i in range(n)))
+    if len(labels) != n:
+        raise ValueError(f"state_names has {len(labels)} names for {n} states")
     _check_user_functions(rhs, jacobian, gap, y0, q)
     return System(name=name, model_id=CUSTOM, params=pack_custom(float(period), q, n),
-                  initial_state=y0, period=float(period), state_names=names,
-                  transient=int(transient), n_states=n, ground="none",
-                  user=UserFunctions.of(rhs, jacobian, gap, n, q.size), **solver)
+                  initial_state=y0, period=float(period), state_names=labels,
+                  transient=int(transient), record=int(record), n_states=n, ground="none",
+                  user=UserFunctions.of(rhs, jacobian, gap, n, q.size), names=names,
+                  period_of=period_of, **solver)
 
 
 def pack_custom(period: float, q: np.ndarray, n: int) -> np.ndarray:
