@@ -283,7 +283,9 @@ def test_line_resultants_match_mpmath(name, regime, data):
 @given(data=st.data())
 def test_line_resultants_mirror_symmetric(name, regime, data):
     """Swapping the ends (negating both slopes) keeps the force and negates the moment:
-    bitwise for the laws on the moments alone, to 1e-13 of the scale for the split lines."""
+    bitwise for the laws on the moments alone, to 1e-12 of the scale for the split lines
+    (their split point is computed from the end values, which the swap exchanges; seen:
+    1.3e-13 where a clipped force nearly cancels)."""
     d_lo, d_hi = data.draw(ends(regime))
     r_lo, r_hi = data.draw(_rate), data.draw(_rate)
     module, p = law_p(name, 0.5)
@@ -293,7 +295,7 @@ def test_line_resultants_mirror_symmetric(name, regime, data):
     assert lo1 == hi2 and hi1 == lo2
     if name in ("jankowski", "kelvin-voigt no-pull"):
         scale = abs(f1) + abs(m1) / half + 1e-300
-        assert abs(f1 - f2) <= 1e-13 * scale and abs(m1 + m2) <= 1e-13 * scale * half
+        assert abs(f1 - f2) <= 1e-12 * scale and abs(m1 + m2) <= 1e-12 * scale * half
     else:
         assert f1 == f2 and m1 == -m2
 
@@ -318,6 +320,15 @@ def test_moment3_matches_mpmath(j, regime, data):
         pts = [0, 1] if lo > 0 and hi > 0 else [0, lo / (lo - hi), 1]
         ref = mpmath.quad(lambda s: pen(s) * (s - 0.5) ** 3, pts)
         scale = mpmath.quad(lambda s: pen(s) * abs(s - 0.5) ** 3, pts)
+        if not (lo > 0 and hi > 0):
+            # one end in contact: the quadrature of the d^j edge singularity errs by
+            # ~1e-12 for j < 0 (seen at j = -0.75); the exact value is a sum of Beta
+            # functions: M3 = sign f p^j int_0^1 (1 - w)^j (1/2 - f w)^3 dw
+            p, sign = (hi, 1) if hi > 0 else (lo, -1)
+            f = p / abs(hi - lo)
+            beta = [mpmath.beta(j + 1, n + 1) for n in range(4)]
+            ref = sign * f * p**j * (beta[0] / 8 - 3 * f * beta[1] / 4
+                                     + 3 * f**2 * beta[2] / 2 - f**3 * beta[3])
     assert abs(got - float(ref)) <= 1e-12 * float(scale)
 
 
