@@ -716,6 +716,12 @@ def _solver_text(solver) -> str:
     return f"{solver.method}, rtol {solver.rtol:g}, atol {solver.atol:g}"
 
 
+def _scene_rows(scene, model: str, period: float) -> list[tuple[str, str]]:
+    """The rows every report of a scene starts with: scene, model, period ratio."""
+    return [("scene", _scene_title(scene)), ("model", model),
+            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {period:.6g})")]
+
+
 def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | None,
                        plot: str | None = None, system=None) -> str:
     """Header, impact table and summary of one run (of a scene, or of ``system``), as text."""
@@ -725,11 +731,8 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
                   ("cycles", f"{sim.transient} transient + {sim.record} recorded")]
     else:
         header = [
-            ("scene", _scene_title(scene)),
-            ("model", f"{sim.model} ({len(sim.state_names)} states: "
-                      f"{' '.join(sim.state_names)})"),
-            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} "
-                             f"(T = {sim.period:.6g})"),
+            *_scene_rows(scene, f"{sim.model} ({len(sim.state_names)} states: "
+                                f"{' '.join(sim.state_names)})", sim.period),
             ("cycles", f"{sim.transient} transient + {sim.record} recorded, "
                        f"section phase {scene.run.phase:g}"),
             ("solver", _solver_text(scene.solver)),
@@ -854,10 +857,8 @@ def _cmd_section(args: argparse.Namespace) -> int:
         _emit(_json_text(document))
         return EXIT_OK
     header = [
-        ("scene", _scene_title(scene)),
-        ("model", f"{section.model} ({len(section.state_names)} states: "
-                  f"{' '.join(section.state_names)})"),
-        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {section.period:.6g})"),
+        *_scene_rows(scene, f"{section.model} ({len(section.state_names)} states: "
+                            f"{' '.join(section.state_names)})", section.period),
         ("section", f"t = ({section.phase:g} + k) T, k = {int(section.cycles[0])} .. "
                     f"{int(section.cycles[-1])}: {len(section)} points"),
         ("solver", _solver_text(scene.solver)),
@@ -964,9 +965,7 @@ def _cmd_impact_map(args: argparse.Namespace) -> int:
         _emit(_json_text(document))
         return EXIT_OK
     header = [
-        ("scene", _scene_title(scene)),
-        ("model", sim.model),
-        ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {sim.period:.6g})"),
+        *_scene_rows(scene, sim.model, sim.period),
         ("cycles", f"{sim.transient} transient + {sim.record} recorded"),
         ("solver", _solver_text(scene.solver)),
     ]  # fmt: skip
@@ -1190,11 +1189,8 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
         header = [*_system_header(system), ("cycles", cycles)]
     else:
         header = [
-            ("scene", _scene_title(scene)),
-            ("model", f"{system.model_name} ({system.dim} states: "
-                      f"{' '.join(system.state_names)})"),
-            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} "
-                             f"(T = {spectrum.period:.6g})"),
+            *_scene_rows(scene, f"{system.model_name} ({system.dim} states: "
+                                f"{' '.join(system.state_names)})", spectrum.period),
             ("cycles", cycles),
             ("solver", _solver_text(scene.solver)),
         ]  # fmt: skip
@@ -1392,12 +1388,7 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
     if _is_system(scene):
         head = [row for row in _system_header(scene) if row[0] != "solver"]
     else:
-        head = [
-            ("scene", _scene_title(scene)),
-            ("model", str(evidence.get("model"))),
-            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} "
-                             f"(T = {scene.period:.6g})"),
-        ]  # fmt: skip
+        head = _scene_rows(scene, str(evidence.get("model")), scene.period)
     rows = [
         *head,
         ("regime", regime.label),

@@ -47,15 +47,36 @@ def run_task(scene, spec, indices: Sequence[int],
 def run_point(scene: Scene, spec, index: int,
               start_state: np.ndarray | None = None) -> PointResult:
     """Steady run, classification and optional exponents of one grid point."""
+    return _run(scene, len(scene.initial_vector()), spec, index, start_state)
+
+
+def run_system_point(system, spec, index: int,
+                     start_state: np.ndarray | None = None) -> PointResult:
+    """:func:`run_point` for a user's System, swept over its named parameters.
+
+    The point is ``system.with_params(**values)``, run for the system's transient
+    and record windows. Its regime comes from the record window (or the
+    adaptive classifier with ``spec.classify == "full"``) with every state
+    component weighted equally, as :func:`chaospound.dynamics.classify.classify`
+    does for custom systems; a system without a gap function has no impacts to
+    classify: its points are stored "unresolved", with their sections, exponents
+    and statistics.
+    """
+    return _run(system, system.dim, spec, index, start_state)
+
+
+def _run(target, n_state: int, spec, index: int,
+         start_state: np.ndarray | None) -> PointResult:
+    """One point of a Scene or a System (see :func:`run_point`, :func:`run_system_point`)."""
     from .dynamics.classify import classify, classify_sequence, length_weights
     from .dynamics.lyapunov import lyapunov_spectrum
     from .simulate import SimulationError, simulate
 
     started = time.perf_counter()
-    n_state = len(scene.initial_vector())
     n_exp = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
     try:
-        point = scene.with_params(**spec.point_values(index))
+        point = target.with_params(**spec.point_values(index))
+        is_scene = isinstance(point, Scene)
         sim = simulate(point, initial_state=start_state,
                        start_at_section=start_state is not None)
         exps = errs = None
@@ -67,20 +88,24 @@ def run_point(scene: Scene, spec, index: int,
             exps, errs = spectrum.exponents, spectrum.errors
             max_exp, max_err = float(exps[0]), float(errs[0])
         imp = sim.impacts
-        if spec.classify == "full":
+        transient_used = sim.transient
+        if not is_scene and not point.has_gap:
+            regime = _Unclassified(float("nan"))
+        elif spec.classify == "full":
             regime = classify(point)
             if exps is None and regime.max_exponent is not None:
                 max_exp, max_err = regime.max_exponent, regime.max_exponent_error
             transient_used = regime.transient_used
         else:
-            weights = length_weights(point, sim.state_names)  # rotations as lengths
+            strobe = sim.strobe.state
+            if is_scene:  # rotations as lengths; a user's components weigh alike
+                strobe = strobe * length_weights(point, sim.state_names)
             regime = classify_sequence(
-                sim.strobe.state * weights, imp.cycle, imp.phase, imp.velocity, imp.labels,
+                strobe, imp.cycle, imp.phase, imp.velocity, imp.labels,
                 max_period=max(1, sim.record // 2), tol=spec.window_tol,
                 exponent=None if exps is None else float(exps[0]),
                 exponent_error=None if errs is None else float(errs[0]),
             )
-            transient_used = sim.transient
         stats = sim.stats
         return PointResult(
             index=index, status=1, message="", regime=regime.regime,
@@ -101,77 +126,6 @@ def run_point(scene: Scene, spec, index: int,
             strobe=sim.strobe.state,
         )
     except (SimulationError, SceneError, ValueError, FloatingPointError, ZeroDivisionError,
-            OverflowError) as exc:
-        return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
-
-
-def run_system_point(system, spec, index: int,
-                     start_state: np.ndarray | None = None) -> PointResult:
-    """:func:`run_point` for a user's System, swept over its named parameters.
-
-    The point is ``system.with_params(**values)``, run for the system's transient
-    and record windows. Its regime comes from the record window (or the
-    adaptive classifier with ``spec.classify == "full"``) with every state
-    component weighted equally, as :func:`chaospound.dynamics.classify.classify`
-    does for custom systems; a system without a gap function has no impacts to
-    classify: its points are stored "unresolved", with their sections, exponents
-    and statistics.
-    """
-    from .dynamics.classify import classify, classify_sequence
-    from .dynamics.lyapunov import lyapunov_spectrum
-    from .simulate import SimulationError, simulate
-
-    started = time.perf_counter()
-    n_state = system.dim
-    n_exp = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
-    try:
-        point = system.with_params(**spec.point_values(index))
-        sim = simulate(point, initial_state=start_state,
-                       start_at_section=start_state is not None)
-        exps = errs = None
-        max_exp = max_err = None
-        if n_exp:
-            spectrum = lyapunov_spectrum(point, k=n_exp, transient=0,
-                                         initial_state=sim.strobe.state[-1],
-                                         cycles=spec.lyapunov_cycles, tangent_transient=10)
-            exps, errs = spectrum.exponents, spectrum.errors
-            max_exp, max_err = float(exps[0]), float(errs[0])
-        imp = sim.impacts
-        transient_used = sim.transient
-        if not point.has_gap:
-            regime = _Unclassified(float("nan"))
-        elif spec.classify == "full":
-            regime = classify(point)
-            if exps is None and regime.max_exponent is not None:
-                max_exp, max_err = regime.max_exponent, regime.max_exponent_error
-            transient_used = regime.transient_used
-        else:
-            regime = classify_sequence(
-                sim.strobe.state, imp.cycle, imp.phase, imp.velocity, imp.labels,
-                max_period=max(1, sim.record // 2), tol=spec.window_tol,
-                exponent=None if exps is None else float(exps[0]),
-                exponent_error=None if errs is None else float(errs[0]),
-            )
-        stats = sim.stats
-        return PointResult(
-            index=index, status=1, message="", regime=regime.regime,
-            impacts_per_period=_int_or(regime.impacts_per_period),
-            period_cycles=_int_or(regime.period_cycles),
-            strobe_mismatch=float(regime.strobe_mismatch),
-            zero_one=_float_or(regime.zero_one),
-            max_exponent=_float_or(max_exp), max_exponent_error=_float_or(max_err),
-            transient_used=int(transient_used),
-            corner_sequence=" ".join(regime.corner_sequence),
-            exponents=exps, final_state=sim.strobe.state[-1].copy(),
-            steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
-            wall_s=time.perf_counter() - started,
-            impacts={"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
-                     "corner": imp.corner.astype(np.int8),
-                     "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
-                     "duration": imp.duration},
-            strobe=sim.strobe.state,
-        )
-    except (SimulationError, ValueError, FloatingPointError, ZeroDivisionError,
             OverflowError) as exc:
         return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
 

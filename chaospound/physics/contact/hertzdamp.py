@@ -45,6 +45,10 @@ from __future__ import annotations
 
 from chaospound.kernels.jit import inline, kernel
 from chaospound.physics.contact.dissipation import V0_FLOOR, check_restitution, moment3
+from chaospound.physics.contact.hertz import (  # noqa: F401  (the elastic part's potential)
+    line_potential,
+    point_potential,
+)
 from chaospound.physics.contact.moments import moments
 from chaospound.physics.powers import power
 
@@ -160,16 +164,6 @@ def point_force_rate(p, base, d, rate, accel=0.0):
     return beta * chi * pw * rate + xi * chi * pw * rate * rate + xi * pw * d * accel
 
 
-@kernel
-def point_potential(p, base, d):
-    """Potential of the elastic part, ``beta d+^(chi + 1) / (chi + 1)``."""
-    if d <= 0.0:
-        return 0.0
-    beta = p[base]
-    chi = p[base + 1]
-    return beta * power(d, chi + 1.0) / (chi + 1.0)
-
-
 @inline
 def line_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
     """Resultant force and first moment of the line contact.
@@ -245,14 +239,3 @@ def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo
     length = 2.0 * half_length
     return (fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / length
             + frc * 0.5 * (accel_lo + accel_hi) + frs * (accel_hi - accel_lo) / length)
-
-
-@kernel
-def line_potential(p, base, d_lo, d_hi):
-    """Potential of the elastic part, ``beta / (L (chi + 1)) int d+^(chi+1) dy``."""
-    if d_lo <= 0.0 and d_hi <= 0.0:
-        return 0.0
-    beta = p[base]
-    chi = p[base + 1]
-    m0, _, _ = moments(chi + 1.0, d_lo, d_hi)
-    return beta * m0 / (chi + 1.0)

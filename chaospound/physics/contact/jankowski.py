@@ -38,6 +38,11 @@ from chaospound.physics.contact.dissipation import (
     approach_rate_moments,
     check_restitution,
 )
+from chaospound.physics.contact.hertz import (  # noqa: F401  (elastic potential; no memory)
+    line_potential,
+    on_onset,
+    point_potential,
+)
 from chaospound.physics.contact.moments import moments
 from chaospound.physics.powers import power
 
@@ -86,12 +91,6 @@ def block(e: float, *, beta: float, m_eff: float, chi: float = 1.5) -> dict[str,
     return {"beta": float(beta), "chi": float(chi), "c_scale": float(c_scale)}
 
 
-@kernel
-def on_onset(p, base, rate):
-    """No memory: nothing to write."""
-    return
-
-
 @inline
 def point_force(p, base, d, rate):
     """``beta d^chi + c_s d^q d'`` approaching, ``beta d^chi`` separating; 0 for d <= 0."""
@@ -123,16 +122,6 @@ def point_force_rate(p, base, d, rate, accel=0.0):
     """``dF/dt = dF/dd d' + dF/dd' d''`` in contact (``accel`` = d'')."""
     k, c = point_stiffness(p, base, d, rate)
     return k * rate + c * accel
-
-
-@kernel
-def point_potential(p, base, d):
-    """Potential of the elastic part, ``beta d+^(chi + 1) / (chi + 1)``."""
-    if d <= 0.0:
-        return 0.0
-    beta = p[base]
-    chi = p[base + 1]
-    return beta * power(d, chi + 1.0) / (chi + 1.0)
 
 
 @inline
@@ -219,15 +208,3 @@ def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo
     length = 2.0 * half_length
     return (fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / length
             + frc * 0.5 * (accel_lo + accel_hi) + frs * (accel_hi - accel_lo) / length)
-
-
-@kernel
-def line_potential(p, base, d_lo, d_hi):
-    """Potential of the elastic part, ``beta / (L (chi + 1)) int d+^(chi+1) dy``."""
-    if d_lo <= 0.0 and d_hi <= 0.0:
-        return 0.0
-    beta = p[base]
-    chi = p[base + 1]
-    m0, _, _ = moments(chi + 1.0, d_lo, d_hi)
-    return beta * m0 / (chi + 1.0)
-

@@ -46,6 +46,11 @@ from chaospound.physics.contact.dissipation import (
     rate_moments,
     restitution_log,
 )
+from chaospound.physics.contact.linear import (  # noqa: F401  (elastic potential; no memory)
+    line_potential,
+    on_onset,
+    point_potential,
+)
 from chaospound.physics.contact.moments import force_moments, moments
 
 NAME = "kelvin-voigt"
@@ -116,20 +121,6 @@ def point_force_rate(p, base, d, rate, accel=0.0):
     if p[base + 2] != 0.0 and p[base] * d + p[base + 1] * rate < 0.0:
         return 0.0
     return p[base] * rate + p[base + 1] * accel
-
-
-@kernel
-def point_potential(p, base, d):
-    """Potential of the elastic part, ``k d+^2 / 2`` (units of A_g^2 K_Ax)."""
-    if d <= 0.0:
-        return 0.0
-    return 0.5 * p[base] * d * d
-
-
-@kernel
-def on_onset(p, base, rate):
-    """No memory: nothing to write."""
-    return
 
 
 @inline
@@ -265,12 +256,3 @@ def line_force_rate(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length, accel_lo
     length = 2.0 * half_length
     return (fc * 0.5 * (rate_lo + rate_hi) + fs * (rate_hi - rate_lo) / length
             + frc * 0.5 * (accel_lo + accel_hi) + frs * (accel_hi - accel_lo) / length)
-
-
-@kernel
-def line_potential(p, base, d_lo, d_hi):
-    """Potential of the elastic part, ``k / (2 L) int d+^2 dy`` (units of A_g^2 K_Ax)."""
-    if d_lo <= 0.0 and d_hi <= 0.0:
-        return 0.0
-    m0, _, _ = moments(2.0, d_lo, d_hi)
-    return 0.5 * p[base] * m0
