@@ -390,7 +390,7 @@ def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
     def broken_replace(src, dst):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr(cli.os, "replace", broken_replace)
+    monkeypatch.setattr(cli.files.os, "replace", broken_replace)  # write_json_file's os
     with pytest.raises(cli.CliError, match="run.json"):
         cli.write_json_file({"x": 1.0}, str(target))
     assert list(tmp_path.iterdir()) == []
@@ -579,7 +579,7 @@ def test_cache_detection_sees_compiled_and_stale_kernels(tmp_path, monkeypatch):
 
 def test_classify_reports_its_stages(capsys, monkeypatch):
     stream = FakeTerminal()
-    monkeypatch.setattr(cli, "STATUS_DELAY_S", 0.0)
+    monkeypatch.setattr(cli.status, "STATUS_DELAY_S", 0.0)
     monkeypatch.setattr(sys, "stderr", stream)
     code = main(["classify", "--preset", "fig3a", "--transient", "5", "--max-transient", "40"])
     out = capsys.readouterr().out

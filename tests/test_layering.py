@@ -130,6 +130,8 @@ def test_the_graph_sees_function_level_and_relative_imports():
     assert "chaospound.engine.compose" in graph["chaospound.simulate"]  # relative
     assert "chaospound.distributed" in graph["chaospound.sweep"]  # inside a function
     assert "chaospound.scene" in graph["chaospound"]  # inside __getattr__
+    assert "chaospound.cli.options" in graph["chaospound.cli.simulate"]  # the cli package
+    assert _under("chaospound.cli.sweep", TOOLS)  # a tool package's modules are tools too
 
 
 def test_no_import_cycles():

@@ -1,0 +1,62 @@
+"""The rows every text report starts with (scene or system, model, period ratio,
+solver), the last table of a report and the unit row of a state column."""
+
+from __future__ import annotations
+
+from chaospound.cli.output import EXIT_OK, _emit, _table
+from chaospound.cli.status import _command_seconds
+
+
+def _system_header(system) -> list[tuple[str, str]]:
+    """The report header of a user's System: name, model, parameters, period, solver."""
+    values = ", ".join(f"{k} = {v:g}" for k, v in system.parameter_values.items())
+    where = f" ({system.origin})" if system.origin else ""
+    return [
+        ("system", f"{system.name}{where}"),
+        ("model", f"custom ({system.dim} states: {' '.join(system.state_names)})"
+                  + ("" if system.has_gap else ", no gap function")),
+        ("parameters", values or "-"),
+        ("period", f"T = {system.period:.6g}"),
+        ("solver", _solver_text(system)),
+    ]  # fmt: skip
+
+
+def _system_document(system) -> dict:
+    from chaospound.sweep import system_identity
+
+    return system_identity(system)
+
+
+def _scene_title(scene) -> str:
+    return f"{scene.name}: {scene.description}" if scene.description else scene.name
+
+
+def _solver_text(solver) -> str:
+    """Method and accuracy setting, as shown in every report header."""
+    if solver.method == "rk4":
+        return f"rk4, {solver.steps_per_cycle} steps per cycle"
+    return f"{solver.method}, rtol {solver.rtol:g}, atol {solver.atol:g}"
+
+
+def _scene_rows(scene, model: str, period: float) -> list[tuple[str, str]]:
+    """The rows every report of a scene starts with: scene, model, period ratio."""
+    return [("scene", _scene_title(scene)), ("model", model),
+            ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {period:.6g})")]
+
+
+def _emit_report(blocks: list[str], tail: list[tuple[str, str]], plot: str | None) -> int:
+    """Print a command's text report: its blocks, then a last table with ``tail``, the
+    whole command's wall time and the figure written."""
+    tail = [*tail, ("wall time", f"{_command_seconds():.3g} s the whole command")]
+    if plot is not None:
+        tail.append(("wrote", plot))
+    _emit("\n\n".join([*blocks, _table(None, tail, "ll")]) + "\n")
+    return EXIT_OK
+
+
+def _state_unit(name: str) -> str:
+    """The unit row of a state column (lengths in A_g, rotations in rad, ...)."""
+    rate = name.startswith("d")
+    if name.lstrip("d").startswith("th"):
+        return "rad omega_Ax" if rate else "rad"
+    return "A_g omega_Ax" if rate else "A_g"
