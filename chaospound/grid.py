@@ -243,7 +243,7 @@ def _decimal_values(start: str, step: str, count: int) -> np.ndarray | None:
     scale = 10 ** -exponent
     first_n, stride_n = int(first * scale), int(stride * scale)
     last_n = first_n + stride_n * (count - 1)
-    if max(abs(first_n), abs(last_n)) >= 2**53:
+    if max(abs(first_n), abs(stride_n), abs(last_n)) >= 2**53:  # also a lone point's step
         return None
     return (first_n + stride_n * np.arange(count, dtype=np.int64)) / float(scale)
 
