@@ -41,14 +41,17 @@ from .scene import PARAMETERS, SHORTHANDS, Scene, SceneError
 __all__ = [
     "MAX_NUMBER_LENGTH",
     "MAX_POINTS",
+    "INITIAL_PHASE",
     "Axis",
     "axes_from_scene",
     "check_axes",
     "check_axis",
     "grid_values",
+    "initial_axis",
     "make_axis",
     "parse_axes",
     "parse_axis",
+    "state_names_of",
 ]
 
 MAX_POINTS = 10_000_000  #: most values of one axis
@@ -62,13 +65,25 @@ EXHAUSTIVE_CHECK = 1000
 _SYNTAX = "use start:stop:step, start:stop#count or v1,v2,..."
 
 
+#: the name of the initial-phase axis of a basin scan (a fraction of the period)
+INITIAL_PHASE = "initial_phase"
+AXIS_KINDS = ("parameter", "state", "phase")
+
+
 @dataclass(frozen=True)
 class Axis:
-    """One swept parameter and its values."""
+    """One swept quantity and its values.
+
+    ``kind`` is "parameter" (a scene's or system's parameter: the sweeps), or,
+    for basins of attraction (:mod:`chaospound.basins`), "state" (a component
+    of the initial state, by its name in the model's state) or "phase" (the
+    forcing phase at the start, :data:`INITIAL_PHASE`).
+    """
 
     name: str
     values: np.ndarray
     spec: str
+    kind: str = "parameter"
 
     def __len__(self) -> int:
         return int(self.values.shape[0])
@@ -374,3 +389,50 @@ def axes_from_scene(scene: Scene) -> list[Axis]:
     axes = [make_axis(name, grid) for name, grid in scene.sweep]
     check_axes(scene, axes)
     return axes
+
+
+# ------------------------------------------------------ initial-condition axes
+
+
+def state_names_of(target) -> tuple[str, ...]:
+    """Names of the state components of a scene (its model's) or a System."""
+    target = _target(target)
+    if isinstance(target, Scene):
+        from .scene import STATE_NAMES
+
+        return STATE_NAMES[target.model_id()]
+    return tuple(target.state_names)
+
+
+def initial_axis(text: str, target) -> Axis:
+    """An axis of initial conditions from ``NAME=GRID`` (a basin scan's ``--grid``).
+
+    ``NAME`` is a state component of the target's model (``X_A``, ``dX_A``, ...
+    for a scene; the system's ``state_names``) or :data:`INITIAL_PHASE` (the
+    forcing phase at the start, a fraction of the period in [0, 1)); ``GRID`` as
+    in :func:`parse_axis`. ``ValueError`` (one line, listing the valid names)
+    for anything else.
+    """
+    text = str(text)
+    if "=" not in text:
+        raise ValueError(f"--grid {shorten(text, quote=True)}: expected NAME=GRID, "
+                         "e.g. X_A=-8:8#101")
+    name, grid = (s.strip() for s in text.split("=", 1))
+    names = state_names_of(target)
+    if name == INITIAL_PHASE:
+        kind = "phase"
+    elif name in names:
+        kind = "state"
+    else:
+        import difflib
+
+        valid = [*names, INITIAL_PHASE]
+        close = difflib.get_close_matches(name, valid, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise ValueError(f"unknown initial-condition axis {shorten(name, quote=True)}{hint}; "
+                         f"valid: {', '.join(valid)}")
+    values = grid_values(name, grid)
+    if kind == "phase" and not (np.all(values >= 0.0) and np.all(values < 1.0)):
+        raise ValueError(f"{name}={shorten(grid)}: the initial phase is a fraction of the "
+                         "period, in [0, 1)")
+    return Axis(name=name, values=values, spec=grid, kind=kind)

@@ -75,10 +75,16 @@ def _run(target, n_state: int, spec, index: int,
     started = time.perf_counter()
     n_exp = 0 if spec.lyapunov == 0 else (n_state if spec.lyapunov < 0 else spec.lyapunov)
     try:
-        point = target.with_params(**spec.point_values(index))
+        values = spec.point_values(index)
+        point = target.with_params(**values) if values else target
         is_scene = isinstance(point, Scene)
+        start_phase = None
+        initial = spec.initial_values(index) if hasattr(spec, "initial_values") else {}
+        if initial:  # a basin scan: this point's own initial state (and phase)
+            start_state, start_phase = _initial_condition(point, initial)
         sim = simulate(point, initial_state=start_state,
-                       start_at_section=start_state is not None)
+                       start_at_section=start_state is not None and start_phase is None,
+                       **({} if start_phase is None else {"start_phase": start_phase}))
         exps = errs = None
         max_exp = max_err = None
         if n_exp:
@@ -128,6 +134,24 @@ def _run(target, n_state: int, spec, index: int,
     except (SimulationError, SceneError, ValueError, FloatingPointError, ZeroDivisionError,
             OverflowError) as exc:
         return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
+
+
+def _initial_condition(point, initial: dict[str, float]) -> tuple[np.ndarray, float | None]:
+    """The start of a basin scan's point: the target's initial state with the scanned
+    components replaced, and the scanned initial phase (None: the scene's start)."""
+    from .grid import INITIAL_PHASE
+
+    if isinstance(point, Scene):
+        from .scene import STATE_NAMES
+
+        model_id = point.model_id()
+        state, names = point.initial_vector(model_id), STATE_NAMES[model_id]
+    else:
+        state, names = np.array(point.initial_state, dtype=np.float64), point.state_names
+    for name, value in initial.items():
+        if name != INITIAL_PHASE:
+            state[list(names).index(name)] = value
+    return state, initial.get(INITIAL_PHASE)
 
 
 class _Unclassified:

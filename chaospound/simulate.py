@@ -248,6 +248,7 @@ def simulate(
     initial_state: np.ndarray | None = None,
     start_at_section: bool = False,
     impact_capacity: int | None = None,
+    start_phase: float | None = None,
 ) -> Simulation:
     """Run a scene to steady state and record impacts and the stroboscopic section.
 
@@ -272,6 +273,11 @@ def simulate(
         from a stroboscopic state).
     impact_capacity : int, optional
         Initial size of the impact table (grown automatically).
+    start_phase : float, optional
+        Start at forcing phase ``start_phase`` (a fraction of the period, in
+        [0, 1)) instead of t = 0: at the time ``start_phase T`` minus the whole
+        periods that put it within one period before the first section (the
+        sections stay at the scene's phase); for basins over the initial phase.
 
     Returns
     -------
@@ -303,6 +309,10 @@ def simulate(
             )
     t0 = run.t0
     tau_start = 0.0 if (start_at_section or t0 == 0.0) else -t0
+    if start_phase is not None:  # t0 + tau_start = start_phase T (mod T), tau_start <= 0
+        if not 0.0 <= start_phase < 1.0:
+            raise ValueError(f"start_phase = {start_phase}: must be in [0, 1)")
+        tau_start = -((t0 - start_phase * period) % period)
     h_fixed = period / solver.steps_per_cycle
     capacity = impact_capacity or max(64, 16 * (record + 1))
     n_rows_traj = samples_per_cycle * record + 1 if samples_per_cycle > 0 else 1

@@ -141,6 +141,18 @@ class SweepSpec:
                              f"{', '.join(CLASSIFY_MODES)}")
         if not 0.0 < self.window_tol < 1.0:
             raise ValueError(f"window_tol = {self.window_tol}: must be in (0, 1)")
+        if self.initial_axes:  # a basin scan: every point starts from its own state
+            if self.continuation != "none":
+                raise ValueError("a scan of initial conditions has no continuation: each "
+                                 "point starts from its own initial state")
+            if self.classify != "window":
+                raise ValueError(f"classify = {self.classify!r}: a scan of initial "
+                                 "conditions classifies its points' own runs (\"window\")")
+
+    @property
+    def initial_axes(self) -> tuple[Axis, ...]:
+        """The axes of initial conditions (state components, initial phase): basins."""
+        return tuple(a for a in self.axes if getattr(a, "kind", "parameter") != "parameter")
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -159,7 +171,7 @@ class SweepSpec:
         return (self.continuation,)
 
     def to_json(self) -> str:
-        return json.dumps({
+        definition = {
             "parameters": [a.name for a in self.axes],
             "specs": [a.spec for a in self.axes],
             "values": [a.values.tolist() for a in self.axes],
@@ -169,12 +181,26 @@ class SweepSpec:
             "lyapunov_cycles": self.lyapunov_cycles,
             "classify": self.classify,
             "window_tol": self.window_tol,
-        })
+        }
+        if self.initial_axes:  # only basin scans carry it: parameter sweeps' text unchanged
+            definition["axis_kinds"] = [getattr(a, "kind", "parameter") for a in self.axes]
+        return json.dumps(definition)
 
     def point_values(self, index: int) -> dict[str, float]:
-        """Parameter values of grid point ``index`` (row-major)."""
+        """Parameter values of grid point ``index`` (row-major); initial-condition axes
+        are in :meth:`initial_values`."""
         coords = np.unravel_index(index, self.shape)
-        return {a.name: float(a.values[c]) for a, c in zip(self.axes, coords, strict=True)}
+        return {a.name: float(a.values[c]) for a, c in zip(self.axes, coords, strict=True)
+                if getattr(a, "kind", "parameter") == "parameter"}
+
+    def initial_values(self, index: int) -> dict[str, float]:
+        """Values of the initial-condition axes (state components, initial phase) of grid
+        point ``index``; empty for a parameter sweep."""
+        if not self.initial_axes:
+            return {}
+        coords = np.unravel_index(index, self.shape)
+        return {a.name: float(a.values[c]) for a, c in zip(self.axes, coords, strict=True)
+                if getattr(a, "kind", "parameter") != "parameter"}
 
     def order(self, branch: str) -> np.ndarray:
         """Grid indices in the branch's visiting order: its chains, concatenated."""
@@ -286,7 +312,7 @@ def run_sweep(
     """
     if workers < 1:
         raise ValueError(f"workers = {workers}: must be >= 1")
-    scene = sweep_target(system)
+    scene = sweep_target(system, spec)
     notes: list[str] = []
     if isinstance(scene, Scene):
         model_id = scene.model_id()
@@ -353,18 +379,21 @@ def run_sweep(
     return summary
 
 
-def sweep_target(system: Scene | System) -> Scene | System:
+def sweep_target(system: Scene | System, spec: SweepSpec | None = None) -> Scene | System:
     """What the workers run: a Scene, or a user's System.
 
     A System made from a scene is its scene with the system's solver and run
     settings (those that differ), so that it is stored and resumed as a scene.
+    A reference system without named parameters (e.g. ``duffing()``) is run as
+    it is when every axis of ``spec`` is an initial condition (a basin scan).
     """
     if isinstance(system, Scene):
         return system
     if not isinstance(system, System):
         raise TypeError(f"run_sweep needs a Scene or a System, got {type(system).__name__}")
     if system.scene is None:
-        if not system.is_custom:
+        basins_only = spec is not None and len(spec.initial_axes) == len(spec.axes)
+        if not system.is_custom and not basins_only:
             raise ValueError(f"system {system.name!r} has no named parameters to sweep: use a "
                              "scene or a custom_system with params={...}")
         return system
@@ -402,6 +431,9 @@ def system_identity(system: System) -> dict:
         "steps_per_cycle": system.steps_per_cycle,
         "max_steps": system.max_steps,
         "restart_at_kinks": system.restart_at_kinks,
+        # a reference system (duffing, lorenz: basin scans) is its model and packed vector
+        **({} if system.is_custom else {"model": system.model_name,
+                                         "packed_params": system.params.tolist()}),
     }
 
 
@@ -412,7 +444,7 @@ def system_metadata(system: System, spec: SweepSpec) -> dict:
         "chaospound_version": __version__,
         "system": json.dumps(identity),
         "sweep": spec.to_json(),
-        "model": "custom",
+        "model": identity["model"],
         "name": system.name,
         "state_names": json.dumps(list(system.state_names)),
         "parameter_names": json.dumps(identity["parameter_names"]),
