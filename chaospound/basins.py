@@ -454,7 +454,7 @@ def write_basins(path, result: BasinMap) -> None:
     """
     from .journal import fsync_dir
     from .lock import OutputBusy, OutputLock
-    from .store import SweepStoreError, StoreWriteError
+    from .store import StoreWriteError, SweepStoreError
 
     path = Path(path)
     try:
