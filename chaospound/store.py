@@ -49,6 +49,15 @@ Schema of the finished file (format "chaospound-sweep", version 1)::
         strobe_start, strobe_count   (N,) int64
         strobe/state          (M, n) flat stroboscopic states
         attrs: impacts_committed, strobe_committed (the flat arrays' lengths), REGIMES
+    /basins/                  only a basin scan (its sweep JSON has "axis_kinds": the axes
+                              are initial conditions; chaospound.basins, docs/basins.md),
+                              added once the points are consolidated
+        label                 (N,) int32: attractor number per grid point, -1 failed
+        attractors/           one row per attractor, by decreasing basin size:
+            regime, label, corner_sequence (bytes), impacts_per_period, period_cycles,
+            count, share, first_point, section_start, section_count, and
+            sections (M, n): each attractor's section states
+        attrs: tol, box, entropy, boundary_entropy, boxes, boundary_boxes, failed, reference
 
 Per-point arrays are indexed by the grid index (row-major over the axes). The
 file is a pure function of the sweep's definition and its points' results:

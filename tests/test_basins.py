@@ -218,3 +218,19 @@ def test_bad_axes_are_one_line_errors(tmp_path):
               progress=False)
     with pytest.raises(ValueError, match="not a scan of initial conditions"):
         identify(open_sweep(tmp_path / "sweep.h5"))
+
+
+@pytest.mark.slow  # ~20 s: the cluster's start; the sweep's Dask path is tested by default
+def test_dask_cluster_gives_the_local_file(tmp_path):
+    """The scan's tasks on a Dask LocalCluster of two processes: the same file."""
+    pytest.importorskip("distributed")
+    from chaospound.distributed import connect, disconnect
+
+    local, dask = tmp_path / "local.h5", tmp_path / "dask.h5"
+    basins(TWIN_WELL, ("x=-2:2#6", "dx=-2:2#6"), local, progress=False)
+    client, cluster = connect("local", 2)
+    try:
+        basins(TWIN_WELL, ("x=-2:2#6", "dx=-2:2#6"), dask, progress=False, client=client)
+    finally:
+        disconnect(client, cluster)
+    assert_same_store(local, dask)
