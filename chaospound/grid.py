@@ -427,6 +427,12 @@ def initial_axis(text: str, target) -> Axis:
         import difflib
 
         valid = [*names, INITIAL_PHASE]
+        target = _target(target)
+        parameters = (target.parameter_names if _is_system(target)
+                      else (*PARAMETERS, *SHORTHANDS))
+        if name in parameters:
+            raise ValueError(f"{shorten(name, quote=True)} is a parameter, not an initial "
+                             f"condition (fix it with --set); scan: {', '.join(valid)}")
         close = difflib.get_close_matches(name, valid, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ValueError(f"unknown initial-condition axis {shorten(name, quote=True)}{hint}; "
