@@ -234,3 +234,46 @@ def test_dask_cluster_gives_the_local_file(tmp_path):
     finally:
         disconnect(client, cluster)
     assert_same_store(local, dask)
+
+
+# ------------------------------------------------------------------ the command
+
+
+def test_cli_scans_plots_and_resumes(tmp_path, capsys):
+    from chaospound.cli import main
+
+    path, figure = tmp_path / "wall.h5", tmp_path / "wall.png"
+    argv = ["basins", "--preset", "wall", "--set", "gap=5", "--set", "period_ratio=0.75",
+            "--set", "transient=100", "--grid", WALL_GRID[0], "--grid", WALL_GRID[1],
+            "-o", str(path), "--quiet"]
+    assert main([*argv, "--plot", str(figure)]) == 0
+    out = capsys.readouterr().out
+    assert "2 attractor(s) on 100 initial conditions (X_A x dX_A)" in out
+    assert "periodic 1-1 (face)" in out and "none 0-1" in out and "basin entropy" in out
+    assert figure.stat().st_size > 0
+    library = basins(WALL, WALL_GRID, tmp_path / "library.h5", progress=False)[1]
+    assert np.array_equal(open_basins(path).labels, library.labels)
+    assert main([*argv, "--resume"]) == 0  # finished: identified again, nothing computed
+    assert "finished already" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("grids, message", [
+    (["X_B=0:1#3"], "unknown initial-condition axis 'X_B' (did you mean 'X_A'?); valid: "
+                    "X_A, dX_A, initial_phase"),
+    (["gap=0:1#3"], "'gap' is a parameter, not an initial condition (fix it with --set)"),
+    (["initial_phase=0:1#3"], "the initial phase is a fraction of the period, in [0, 1)"),
+    (["X_A=0:1#3", "X_A=0:2#3"], "--grid X_A given twice"),
+    ([], "nothing to scan: give --grid NAME=GRID"),
+])
+def test_cli_bad_grid_is_one_line_exit_2(tmp_path, capsys, grids, message):
+    from chaospound.cli import main
+
+    argv = ["basins", "--preset", "wall", "-o", str(tmp_path / "b.h5")]
+    for grid in grids:
+        argv += ["--grid", grid]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("chaospound: error: ")
+    assert message in lines[0]
+    assert captured.out == "" and list(tmp_path.iterdir()) == []

@@ -8,6 +8,7 @@ Commands::
     chaospound section (--preset NAME | SCENE.toml) [--phase P] [--cycles N] [--plot FILE] ...
     chaospound impact-map (--preset NAME | SCENE.toml) [--plot FILE] [--json] ...
     chaospound sweep (--preset NAME | SCENE.toml) [--param NAME=GRID ...] -o FILE.h5 ...
+    chaospound basins (--preset NAME | SCENE.toml) --grid NAME=GRID [--grid ...] -o FILE.h5
     chaospound plot FILE.h5 [-o FILE.png|.pdf|.svg] [--branch NAME] [--dpi N] [--size W,H] ...
     chaospound orbit (--preset NAME | SCENE.toml) [--period K] [--json]
     chaospound continue (--preset NAME | SCENE.toml) --param NAME=START:STOP [--period K] -o B.h5
@@ -33,6 +34,7 @@ Layout: one module per command (:mod:`~chaospound.cli.presets` with params,
 :mod:`~chaospound.cli.simulate`, :mod:`~chaospound.cli.section`,
 :mod:`~chaospound.cli.impact_map`, :mod:`~chaospound.cli.lyapunov`,
 :mod:`~chaospound.cli.classify`, :mod:`~chaospound.cli.sweep`,
+:mod:`~chaospound.cli.basins`,
 :mod:`~chaospound.cli.plot`, :mod:`~chaospound.cli.bench`,
 :mod:`~chaospound.cli.orbit` with continue), each with ``add_parser(commands)``
 and its ``_cmd_*`` function, registered by :data:`COMMANDS`; the shared helpers
@@ -52,6 +54,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from chaospound.cli import (
+    basins,
     bench,
     classify,
     impact_map,
@@ -113,8 +116,8 @@ __all__ = [
 
 #: the command modules, in the order of ``chaospound --help``: each adds its
 #: subcommands with ``add_parser(commands)``
-COMMANDS = (presets, simulate, section, impact_map, lyapunov, classify, sweep, plot, bench,
-            orbit)
+COMMANDS = (presets, simulate, section, impact_map, lyapunov, classify, sweep, basins, plot,
+            bench, orbit)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
