@@ -255,6 +255,10 @@ def test_cli_scans_plots_and_resumes(tmp_path, capsys):
     assert np.array_equal(open_basins(path).labels, library.labels)
     assert main([*argv, "--resume"]) == 0  # finished: identified again, nothing computed
     assert "finished already" in capsys.readouterr().out
+    drawn = tmp_path / "drawn.png"
+    assert main(["plot", str(path), "-o", str(drawn)]) == 0
+    assert "basin map of X_A x dX_A" in capsys.readouterr().out
+    assert drawn.stat().st_size > 0
 
 
 @pytest.mark.parametrize("grids, message", [

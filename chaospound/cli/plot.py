@@ -93,7 +93,14 @@ def _cmd_plot(args: argparse.Namespace) -> int:
             raise CliError(f"--orbit: needs a sweep over one parameter, this one is over "
                            f"{' x '.join(sweep.parameters)}")
     branches = [args.branch] if args.branch is not None else list(sweep.branches)
-    fig = _sweep_figure(sweep, branches, args.orbit)
+    basin = "axis_kinds" in sweep.sweep and args.orbit is None  # chaospound basins' file
+    if basin:
+        from chaospound.basins import open_basins
+        from chaospound.plot_basins import plot_basins
+
+        fig = plot_basins(open_basins(args.sweep_file), state_names=sweep.state_names)
+    else:
+        fig = _sweep_figure(sweep, branches, args.orbit)
     if args.size is not None:
         fig.set_size_inches(*args.size)
     for text in [fig.get_suptitle() and fig._suptitle, *(ax.title for ax in fig.axes)]:
@@ -112,6 +119,7 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise CliError(f"cannot write {_path(output)}: {exc.strerror or exc}") from None
     kind = "bifurcation diagram" if len(sweep.parameters) == 1 else "regime map"
+    kind = "basin map" if basin else kind
     if args.orbit is not None:
         kind += f" and orbit diagram of {args.orbit}"
     elif len(sweep.parameters) == 2 and _has_exponents(sweep, branches):
