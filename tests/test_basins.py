@@ -161,6 +161,21 @@ def test_resume_after_interruption_gives_the_same_file(tmp_path, monkeypatch):
     assert np.array_equal(again.labels, open_basins(reference).labels)
 
 
+def test_a_scan_killed_before_its_basins_group_is_completed_by_resume(tmp_path):
+    """The points are consolidated first, the /basins group is added after: a file
+    without the group (a kill in between) is identified on reading, and --resume
+    adds the group, the uninterrupted scan's file again."""
+    reference = tmp_path / "whole.h5"
+    _, whole = basins(WALL, WALL_GRID, reference, progress=False)
+    path = tmp_path / "points-only.h5"
+    axes = tuple(initial_axis(g, WALL) for g in WALL_GRID)
+    run_sweep(WALL, SweepSpec(axes), path, progress=False)  # what a kill would leave
+    assert np.array_equal(open_basins(path).labels, whole.labels)
+    summary, _ = basins(WALL, WALL_GRID, path, progress=False, resume=True)
+    assert summary.finished_before and summary.computed == 0
+    assert_same_store(path, reference)
+
+
 def test_one_and_two_workers_give_identical_files(tmp_path):
     one, two = tmp_path / "one.h5", tmp_path / "two.h5"
     basins(TWIN_WELL, ("x=-2:2#8", "dx=-2:2#8"), one, progress=False)
