@@ -421,6 +421,12 @@ def initial_axis(text: str, target) -> Axis:
     names = state_names_of(target)
     if name == INITIAL_PHASE:
         kind = "phase"
+        resolved = _target(target)
+        ground = (resolved.excitation.ground if isinstance(resolved, Scene)
+                  else getattr(resolved, "ground", "sine"))
+        if ground == "record":  # a record is not periodic: its time origin is fixed
+            raise ValueError(f"{INITIAL_PHASE}: needs a periodic forcing, not a ground "
+                             "record (scan state components instead)")
     elif name in names:
         kind = "state"
     else:

@@ -79,7 +79,7 @@ def _run(target, n_state: int, spec, index: int,
         point = target.with_params(**values) if values else target
         is_scene = isinstance(point, Scene)
         start_phase = None
-        initial = spec.initial_values(index) if hasattr(spec, "initial_values") else {}
+        initial = spec.initial_values(index)
         if initial:  # a basin scan: this point's own initial state (and phase)
             start_state, start_phase = _initial_condition(point, initial)
         sim = simulate(point, initial_state=start_state,

@@ -225,6 +225,13 @@ def test_bad_axes_are_one_line_errors(tmp_path):
         initial_axis("dXA=0:1#3", WALL)
     with pytest.raises(ValueError, match=r"in \[0, 1\)"):
         initial_axis("initial_phase=0:1#3", WALL)
+    record = tmp_path / "quake.txt"  # time (s), acceleration (g)
+    np.savetxt(record, np.column_stack([np.arange(100) * 0.01,
+                                        0.1 * np.sin(np.arange(100) * 0.3)]))
+    quake = WALL.with_params(ground="record", ground_file=str(record), length_unit=0.01,
+                             tower_period=0.5)
+    with pytest.raises(ValueError, match="needs a periodic forcing"):
+        initial_axis("initial_phase=0:0.5#3", quake)
     with pytest.raises(ValueError, match="is a parameter"):
         basins(WALL, [parse_axis("gap=1:2#2", WALL)], tmp_path / "no.h5", progress=False)
     assert not (tmp_path / "no.h5").exists()
