@@ -83,7 +83,7 @@ FORCE_LABEL = r"contact force $F/(A_g\,k_{Ax})$"
 HISTORY_PANELS = ("X", "Y", "th", "clearance", "force")
 _HISTORY_SYMBOLS = {"X": "$X_{}$", "Y": "$Y_{}$", "th": r"$\theta_{}$"}
 _HISTORY_UNITS = {"X": r"$X/A_g$", "Y": r"$Y/A_g$", "th": r"$\theta$ (rad)"}
-#: axis label of each sweep parameter: symbol and unit (docs/model.md section 1), never the
+#: axis label of each sweep parameter: symbol and unit (docs/model.md section 3), never the
 #: raw flat name; see :func:`parameter_label`
 PARAMETER_LABELS = {
     "period_ratio": PERIOD_RATIO_LABEL,
