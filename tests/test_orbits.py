@@ -11,15 +11,24 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from chaospound.cli import main
+from chaospound.dynamics.classify import classify
 from chaospound.dynamics.lyapunov import _constant_trace, lyapunov_spectrum
-from chaospound.dynamics.system import advance, duffing
-from chaospound.orbits import OrbitNotFound, StroboscopicMap, find_orbit, orbit_trajectory
+from chaospound.dynamics.system import System, advance, duffing, monodromy
+from chaospound.orbits import (
+    OrbitNotFound,
+    StroboscopicMap,
+    find_orbit,
+    finite_difference_monodromy,
+    orbit_trajectory,
+)
 from chaospound.orbits.continuation import continue_branch, switch_period_doubling
+from chaospound.orbits.floquet import response_floquet, spectrum_floquet
 from chaospound.orbits.shooting import newton_fixed_point, orbit_at
 from chaospound.orbits.store import open_branches, write_branches
 from chaospound.scene import load_preset
@@ -449,3 +458,81 @@ def test_fig3a_orbit_loses_stability_at_a_neimark_sacker_point(tmp_path):
         assert abs(near.multipliers[0].imag) > 0.5
     # the torus rotates by arg(mu) / 2 pi = 0.217 per cycle, near the 1:5 locking seen
     assert abs(np.angle(pair[0]) / (2 * np.pi) - 1 / 5) < 0.03
+
+
+# ------------------------------------------- exact exponents of periodic responses
+FIG4_070 = load_preset("fig4").with_params(period_ratio=0.70)
+
+
+def test_classify_gives_the_exact_floquet_exponents_of_a_periodic_response():
+    """fig4 at T/T_Ax = 0.70 (issue 16): classify solves the 3-1 orbit and reports its
+    Floquet exponents, equal to the orbit solver's from a 200-cycle start and to those
+    of a finite-difference monodromy (5-point stencil) to 1e-6; the Lyapunov spectrum's
+    companion report finds the same orbit from the end of the QR run."""
+    regime = classify(FIG4_070)
+    assert regime.label == "group-periodic 3-1"
+    floquet = regime.evidence["floquet"]
+    assert floquet["method"] == "variational" and floquet["residual"] <= 1e-10
+    assert regime.floquet_exact and floquet["confirmed"] and regime.confidence == 1.0
+    smap = StroboscopicMap.of(FIG4_070)
+    orbit = find_orbit(smap, transient=200)
+    np.testing.assert_allclose(regime.floquet_exponents, orbit.exponents, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(regime.floquet_multipliers, orbit.multipliers, atol=1e-9)
+    fd = find_orbit(replace(smap, monodromy_provider=finite_difference_monodromy),
+                    initial_state=orbit.state)
+    np.testing.assert_allclose(regime.floquet_exponents, fd.exponents, rtol=0, atol=1e-6)
+    assert json.loads(json.dumps(regime.to_json_dict()))["floquet_exact"] is True
+    spectrum = lyapunov_spectrum(FIG4_070)
+    report = spectrum_floquet(FIG4_070, spectrum)
+    assert report.exact and report.period == 1 and report.method == "variational"
+    np.testing.assert_allclose(report.exponents, orbit.exponents, rtol=0, atol=1e-9)
+    chaotic = load_preset("fig4").with_params(period_ratio=0.9)
+    assert spectrum_floquet(chaotic, lyapunov_spectrum(chaotic, k=1)) is None
+
+
+def test_floquet_multipliers_do_not_depend_on_the_section_phase():
+    """The multipliers belong to the orbit, not to the section that cuts it: with the
+    section inside a contact episode (phase 0.645; the group's first impact starts at
+    0.633 and lasts 0.05 of a cycle) they equal those of the section at phase 0, and so
+    do the impacts, in rotated order. (The map must return the state at the section,
+    not where the engine stopped following the episode.)"""
+    base = find_orbit(StroboscopicMap.of(FIG4_070), transient=200)
+    inside = find_orbit(StroboscopicMap.of(FIG4_070.with_params(phase=0.645)), transient=200)
+    run = simulate(StroboscopicMap.of(FIG4_070.with_params(phase=0.645)).system, transient=0,
+                   record=1, initial_state=inside.state, start_at_section=True)
+    end = run.impacts.time + run.impacts.duration
+    assert np.any((run.impacts.time < run.strobe.time[-1]) & (run.strobe.time[-1] < end))
+    np.testing.assert_allclose(sort_complex(inside.multipliers), sort_complex(base.multipliers),
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.sort(inside.impact_velocity), np.sort(base.impact_velocity),
+                               rtol=0, atol=1e-9)
+    assert inside.corners == base.corners[1:] + base.corners[:1]
+
+
+@pytest.mark.parametrize("law", ["hertzdamp", "kelvin_voigt"])
+def test_laws_without_tangent_dynamics_fall_back_to_finite_differences(law):
+    """A law with per-episode memory (hertzdamp) or a force jump at onset (Kelvin-Voigt):
+    the engine refuses the variational monodromy, classify falls back on the
+    finite-difference one and says so. Check against forward integration: a perturbation
+    of 1e-6 grows over 10 cycles as M^10 predicts (to its own O(1e-6) nonlinearity)."""
+    scene = FIG4_070.with_params(contact_law=law)
+    system = System.from_scene(scene)
+    with pytest.raises(ValueError, match="saltation"):
+        monodromy(system, system.initial_state, 1)
+    regime = classify(scene)
+    floquet = regime.evidence["floquet"]
+    assert regime.label == "group-periodic 3-1" and regime.floquet_exact
+    assert floquet["method"] == "finite-difference" and "saltation" in floquet["note"]
+    smap = StroboscopicMap.of(scene, monodromy_provider=finite_difference_monodromy)
+    report = response_floquet(scene, smap.start_state(200), 1)
+    np.testing.assert_allclose(report.exponents, regime.floquet_exponents, rtol=0, atol=1e-7)
+    x, m = report.orbit.state, report.orbit.monodromy
+    delta = np.random.default_rng(1).normal(size=x.size)
+    delta *= 1e-6 / np.linalg.norm(delta)
+    predicted = np.linalg.matrix_power(m, 10) @ delta
+    forward = smap.advance(x + delta, 10) - x
+    assert np.linalg.norm(forward - predicted) < 1e-4 * np.linalg.norm(predicted)
+    if law == "hertzdamp":  # with a section inside a contact the memory is hidden state
+        phase = scene.with_params(phase=0.645)
+        inside = response_floquet(phase, StroboscopicMap.of(phase).start_state(200), 1)
+        assert not inside.exact and "memory not in the state" in inside.note

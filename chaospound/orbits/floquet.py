@@ -220,7 +220,15 @@ def response_floquet(system_or_scene: System | Scene, state: np.ndarray, period:
         x, m, res, it = newton_fixed_point(smap, x0, k, max_iter=max_iter)
         orbit = orbit_at(smap, x, k, m, res, it)
     except (OrbitNotFound, SimulationError) as exc:
-        return _failed(k, system.period, f"no orbit: {exc}")
+        note = f"no orbit: {exc}"
+        if method == "finite-difference" and _memory_law(system):
+            try:
+                if _contact_spans_section(smap, x0, k):
+                    note += (f" (a contact episode spans a section: the map depends on the "
+                             f"{system.law} law's onset velocity, memory not in the state)")
+            except SimulationError:
+                pass
+        return _failed(k, system.period, note)
     distance = float(np.max(np.abs(x - x0))) / state_scale(x)
     reasons = []
     if distance > CONFIRM_DISTANCE:
