@@ -29,6 +29,7 @@ from chaospound.orbits import (
 )
 from chaospound.orbits.continuation import continue_branch, switch_period_doubling
 from chaospound.orbits.floquet import response_floquet, spectrum_floquet
+from chaospound.orbits.grazing import clearance_minima, free_flight_clearance
 from chaospound.orbits.shooting import newton_fixed_point, orbit_at
 from chaospound.orbits.store import open_branches, write_branches
 from chaospound.scene import load_preset
@@ -266,16 +267,42 @@ def test_wall_stable_branch_coincides_with_brute_force_velocities(wall_branch, w
 
 
 def test_grazing_point_separates_impacting_from_free_orbits(wall_branch):
-    """Just before the located grazing the orbit has no impact; just past it (before
-    the fold) it has one: forward simulation over one period of each orbit."""
+    """Located on the free flight's minimum gap (regula falsi, bracket < 1e-9): 1e-9
+    before it the orbit has no impact and its closest approach is a small positive
+    gap; 1e-9 past it (before the fold) it has one: forward simulation over one
+    period of each orbit."""
     smap, branch = wall_branch
     [graze] = branch.of_kind("grazing")
-    for offset, expected in ((-1e-7, 0), (1e-7, 1)):
+    assert "clearance" in graze.note and graze.bracket < 1e-9
+    assert abs(graze.test) < 1e-7  # the clearance's minimum at the located point
+    for offset, expected in ((-1e-9, 0), (1e-9, 1)):
         at = smap.with_parameter(value=graze.value + offset)
         orbit = find_orbit(at, initial_state=graze.orbit.state)
         run = simulate(at.system, transient=0, record=1, initial_state=orbit.state,
                        start_at_section=True)
         assert len(run.impacts) == expected == orbit.impacts_per_period
+        gap = free_flight_clearance(at, orbit.state)
+        if expected == 0:
+            assert 0 < gap < 1e-6
+    before = smap.with_parameter(value=graze.value - 1e-6)
+    orbit = find_orbit(before, initial_state=graze.orbit.state)
+    assert 1e-5 < free_flight_clearance(before, orbit.state) < 1e-4  # ~43 per unit T/T_Ax
+
+
+def test_clearance_of_the_linear_response_is_the_closed_form():
+    """Without contact (gap 8, T/T_Ax 0.6) the wall model's relative displacement
+    X - u_g is the sinusoid Re[(C + i) e^{iwt}]: the one minimum of the clearance
+    per cycle is gap - |C + i|, which the dense samples' Hermite interpolation finds
+    to 1e-9."""
+    scene = load_preset("wall").with_params(gap=8.0, period_ratio=0.6)
+    smap = StroboscopicMap.of(scene)
+    orbit = find_orbit(smap, transient=0, initial_state=[0.0, 0.0])
+    assert orbit.impacts_per_period == 0
+    c = complex(*linear_response(1.0, 0.03, 1 / 0.6))  # (X, X') at t = 0: X = Re[C]
+    c = complex(c.real, -c.imag * 0.6)  # C = X(0) - i X'(0) / w
+    minima = clearance_minima(smap, orbit.state, 1)
+    assert minima.shape[0] == 1
+    assert minima[0, 1] == pytest.approx(8.0 - abs(c + 1j), abs=1e-9)
 
 
 def test_branch_file_round_trip_and_cli(wall_branch, wall_sweep, tmp_path, capsys):
