@@ -166,6 +166,12 @@ def test_fd_monodromy_obeys_the_trace_identity(fig3a_orbit):
     assert np.prod(orbit.multipliers).real == pytest.approx(math.exp(trace * smap.period),
                                                             rel=1e-7)
     assert np.sum(orbit.exponents) == pytest.approx(trace, rel=1e-7)
+    # the variational monodromy (the default): the 1e-10 (measured 2e-12), and
+    # its multipliers are a finite-difference monodromy's eigenvalues to 1e-6 (3e-9)
+    assert abs(np.sum(orbit.exponents) - trace) < 1e-10
+    _, fd = finite_difference_monodromy(smap, orbit.state, 1)
+    fd_mu = np.linalg.eigvals(fd)
+    assert max(np.min(np.abs(fd_mu - mu)) for mu in orbit.multipliers) < 1e-6
     # two periods, an impacting wall orbit, and the Duffing oscillator (trace -d)
     _, m2 = smap.monodromy(orbit.state, 2)
     assert np.linalg.det(m2) == pytest.approx(math.exp(2 * trace * smap.period), rel=1e-7)
