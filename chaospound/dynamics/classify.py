@@ -411,10 +411,15 @@ def _with_floquet(regime: Regime, system: System, state: np.ndarray) -> Regime:
     it and says why.
     """
     from ..orbits.floquet import response_floquet
+    from .system import SimulationError
 
-    floquet = response_floquet(system, state, regime.period_cycles,
-                               impacts_per_period=regime.impacts_per_period,
-                               corner_sequence=tuple(regime.corner_sequence))
+    try:
+        floquet = response_floquet(system, state, regime.period_cycles,
+                                   impacts_per_period=regime.impacts_per_period,
+                                   corner_sequence=tuple(regime.corner_sequence))
+    except (SimulationError, ValueError, np.linalg.LinAlgError) as exc:
+        return replace(regime, evidence={**regime.evidence, "floquet": {
+            "found": False, "exact": False, "note": f"no orbit: {exc}"}})
     evidence = {**regime.evidence, "floquet": floquet.to_json_dict()}
     if not floquet.found:
         return replace(regime, evidence=evidence)
