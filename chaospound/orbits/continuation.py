@@ -182,9 +182,16 @@ class _Point:
         return self.orbit
 
 
-def _evaluate(base: StroboscopicMap, x: np.ndarray, lam: float, k: int):
+def _evaluate(base: StroboscopicMap, x: np.ndarray, lam: float, k: int, *,
+              approximate: bool = False):
+    """(map at lam, P^k(x), M, dP^k/dlam); with ``approximate`` M is the map's
+    approximate monodromy (chord iterations), P^k(x) still the exact state."""
     smap = base.with_parameter(value=lam)
-    xk, m = smap.monodromy(x, k)
+    if approximate and smap.jacobian_rtol is not None:
+        xk = smap.advance(x, k)
+        _, m = smap.approximate_monodromy(x, k)
+    else:
+        xk, m = smap.monodromy(x, k)
     p_lam = smap.parameter_derivative(x, k)
     return smap, xk, m, p_lam
 
@@ -193,17 +200,19 @@ def _correct(base: StroboscopicMap, y_pred: np.ndarray, t: np.ndarray, k: int, *
              tol: float, max_iter: int = 8) -> _Point:
     """Newton on [P^k(x; lam) - x; t . (y - y_pred)] = 0 from y_pred.
 
-    Chord iterations: the bordered Jacobian of the predicted point is kept while the
-    residual falls at least fourfold per iteration (one run of k periods each), and
-    evaluated afresh otherwise; the converged point gets its own M and dP/dlambda
-    (for the tangent and the test functions).
+    Chord iterations: the bordered Jacobian of the predicted point, with the map's
+    approximate monodromy (:meth:`StroboscopicMap.approximate_monodromy`), is kept
+    while the residual falls at least fourfold per iteration (one run of k periods
+    each), and evaluated afresh otherwise; the converged point gets its own exact M
+    and dP/dlambda (for the tangent and the test functions).
     """
     n = y_pred.shape[0] - 1
     y = y_pred.copy()
     eye = np.eye(n)
     last = np.inf
-    smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
-    fresh = True
+    smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k, approximate=True)
+    fresh = True  # the Jacobian was evaluated at the current y
+    exact = smap.jacobian_rtol is None  # ... and with the exact M
     jac = None
     res = np.inf
     for it in range(max_iter + 1):
@@ -212,13 +221,13 @@ def _correct(base: StroboscopicMap, y_pred: np.ndarray, t: np.ndarray, k: int, *
         if not np.isfinite(res):
             raise OrbitNotFound("corrector: non-finite residual")
         if res <= tol:
-            if not fresh:
+            if not (fresh and exact):
                 smap, _, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
             return _Point(smap, y[:n].copy(), float(y[n]), m, p_lam, res, it, k)
         if it == max_iter or (it >= 2 and res > 0.5 * last):
             break
         if not fresh and res > 0.25 * last:  # slow chord: a fresh Jacobian
-            smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
+            smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k, approximate=True)
             fresh = True
         if fresh:
             jac = np.zeros((n + 1, n + 1))
