@@ -569,3 +569,27 @@ def test_laws_without_tangent_dynamics_fall_back_to_finite_differences(law):
         phase = scene.with_params(phase=0.645)
         inside = response_floquet(phase, StroboscopicMap.of(phase).start_state(200), 1)
         assert not inside.exact and "memory not in the state" in inside.note
+
+
+def test_cli_lyapunov_and_classify_say_which_exponents_are_exact(capsys):
+    """`chaospound lyapunov` prints the exact Floquet exponents of a periodic response
+    beside the QR estimates (and says which are exact); `classify` reports the exact
+    largest exponent instead of '-'; a chaotic response has none."""
+    orbit = find_orbit(StroboscopicMap.of(FIG4_070), transient=200)
+    assert main(["lyapunov", "--preset", "fig4", "--set", "period_ratio=0.70", "--json",
+                 "--quiet"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    floquet = document["floquet"]
+    assert floquet["periodic"] and floquet["exact"] and floquet["period_cycles"] == 1
+    np.testing.assert_allclose(floquet["exponents"], orbit.exponents, rtol=0, atol=1e-9)
+    assert main(["lyapunov", "--preset", "fig4", "--set", "period_ratio=0.70", "--k", "2",
+                 "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "Floquet (per unit t, exact)" in text and "-0.0301746" in text
+    assert "exact: the response's Lyapunov exponents" in text
+    assert main(["classify", "--preset", "fig4", "--set", "period_ratio=0.70",
+                 "--quiet"]) == 0
+    assert "-0.0301746 per unit t" in capsys.readouterr().out
+    assert main(["lyapunov", "--preset", "fig4", "--set", "period_ratio=0.9", "--k", "1",
+                 "--cycles", "50", "--json", "--quiet"]) == 0
+    assert json.loads(capsys.readouterr().out)["floquet"]["periodic"] is False
