@@ -2,15 +2,16 @@
 
 A period-k orbit (k forcing periods) is a fixed point of P^k, solved by
 Newton's method on F(x) = P^k(x) - x with the Jacobian M - I, M the
-monodromy matrix of the map's provider (:mod:`chaospound.orbits.maps`), kept
-from an earlier iterate while the residual falls at least twofold per
-iteration (chord steps: one run of k periods each instead of a matrix).
+monodromy matrix of the map's provider (:mod:`chaospound.orbits.maps`) at the
+looser tolerance of :meth:`StroboscopicMap.approximate_monodromy`, kept from
+an earlier iterate while the residual falls at least twofold per iteration
+(chord steps: one run of k periods each instead of a matrix); the exact matrix
+is evaluated once, at the converged state.
 Safeguards: the Newton step is cut to a trust radius (``trust`` times the
 state scale max(1, |x|_inf)) and then backtracked (halved) until the residual
 decreases; converged when |F|_inf <= tol * max(1, |x|_inf) (default 1e-10).
-The multipliers are the eigenvalues of M at the converged state (the
-evaluation that showed convergence: no extra integration), the Floquet
-exponents log|mu| / (k T) per unit normalised time.
+The multipliers are the eigenvalues of that exact M, the Floquet exponents
+log|mu| / (k T) per unit normalised time.
 """
 
 from __future__ import annotations
