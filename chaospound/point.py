@@ -98,7 +98,7 @@ def _run(target, n_state: int, spec, index: int,
         if not is_scene and not point.has_gap:
             regime = _Unclassified(float("nan"))
         elif spec.classify == "full":
-            regime = classify(point)
+            regime = classify(point, floquet=False)  # a sweep stores no Floquet data
             if exps is None and regime.max_exponent is not None:
                 max_exp, max_err = regime.max_exponent, regime.max_exponent_error
             transient_used = regime.transient_used

@@ -138,13 +138,28 @@ def _classify_save_plot(scene: Scene, regime, path: str) -> None:
         raise CliError(f"cannot write {_path(path)}: {exc.strerror or exc}") from None
 
 
+def _floquet_text(regime, floquet: dict, period_t: float) -> str:
+    """The largest exponent of a periodic response from its solved orbit (rule 8)."""
+    if regime.floquet_exponents is None:
+        return f"- (periodic; {floquet.get('note', 'no orbit')})"
+    lam = regime.floquet_exponents[0]
+    how = (f"orbit solved by Newton, {floquet['method']} monodromy, max |mu| = "
+           f"{abs(regime.floquet_multipliers[0]):.6f}")
+    state = "exact Floquet exponent" if regime.floquet_exact else \
+        f"Floquet exponent, NOT exact: {floquet['note']}"
+    return f"{lam:+.7f} per unit t, {lam * period_t:+.7f} per cycle ({state}; {how})"
+
+
 def _classify_report(scene: Scene, regime, plot: str | None) -> str:
     """The classification as an aligned text report."""
     evidence = regime.evidence
     cycles = regime.period_cycles
     period = "-" if cycles is None else f"{cycles} cycle{'' if cycles == 1 else 's'}"
     impacts = "-" if regime.impacts_per_period is None else str(regime.impacts_per_period)
-    if regime.max_exponent is None:
+    floquet = evidence.get("floquet")
+    if regime.max_exponent is None and floquet is not None:
+        exponent = _floquet_text(regime, floquet, scene.period)
+    elif regime.max_exponent is None:
         exponent = "- (not needed: a period was found)" if regime.period_cycles else "-"
     else:
         period_t = scene.period

@@ -54,6 +54,11 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="also the largest exponent from two nearby trajectories "
         f"(separation {LYAPUNOV_SEPARATION:g}, rtol tightened to <= {LYAPUNOV_TWO_RTOL:g})",
     )
+    group.add_argument(
+        "--no-floquet",
+        action="store_true",
+        help="skip the orbit solve that gives a periodic response's exact (Floquet) exponents",
+    )
     add_output_options(parser, plot_help="write the convergence figure (.png, .pdf or .svg; "
                        "an existing figure is redrawn)")
     parser.set_defaults(func=_cmd_lyapunov)
@@ -92,6 +97,13 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
             n_blocks=LYAPUNOV_BLOCKS,
         )
     wall = time.perf_counter() - start
+    floquet = None
+    if not args.no_floquet:
+        from chaospound.orbits.floquet import spectrum_floquet
+
+        with _Status("periodic? the orbit by Newton shooting for the exact exponents",
+                     quiet=args.quiet):
+            floquet = spectrum_floquet(system, spectrum)
     two, two_system, two_wall = None, None, 0.0
     if args.two_trajectory:
         two_system = system
@@ -114,6 +126,8 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
                  f"{system.model_name} model")
         _lyapunov_save_plot(spectrum, two, args.plot, title)
     document = _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
+    if not args.no_floquet:
+        document["floquet"] = _floquet_document(floquet)
     if args.json:
         _emit(_json_text(document))
     else:
@@ -176,6 +190,37 @@ def _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
     return document
 
 
+def _floquet_document(floquet) -> dict:
+    """The orbit solve beside the QR estimates: which exponents are exact."""
+    if floquet is None:
+        return {"periodic": False, "exact": False,
+                "note": "no period <= 16 cycles at the end of the run: the QR estimates "
+                        "stand alone"}
+    return {"periodic": True, **floquet.to_json_dict(),
+            "per_cycle": [float(e) for e in floquet.per_cycle]}
+
+
+def _floquet_summary(floquet: dict, spectrum) -> tuple[str, str]:
+    """The report's row on the Floquet exponents (which numbers are exact, and why)."""
+    if not floquet["periodic"]:
+        return ("periodic orbit", "none found (no period <= 16 cycles at the end of the run): "
+                                  "the QR estimates above stand alone")
+    period = floquet["period_cycles"]
+    cycles = f"period {period} cycle{'' if period == 1 else 's'}"
+    if not floquet["found"]:
+        return ("periodic orbit", f"{cycles}, but {floquet['note']}")
+    lam = floquet["exponents"][0]
+    gap = spectrum.max_exponent - lam
+    err = spectrum.max_error
+    off = f", {abs(gap) / err:.1f} error bars" if err > 0 else ""
+    state = ("exact: the response's Lyapunov exponents; the QR values above are finite-run "
+             "estimates" if floquet["exact"] else f"NOT exact ({floquet['note']})")
+    return ("Floquet exponents",
+            f"{cycles}, orbit solved by Newton (residual {floquet['residual']:.1e}, "
+            f"{floquet['method']} monodromy): {state}; lambda_1 = {lam:+.7f} per unit t, "
+            f"QR - Floquet = {gap:+.2g}{off}")
+
+
 def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) -> str:
     """Header, exponent table and summary of one Lyapunov run, as text."""
     cycles = (f"{spectrum.transient} transient + {spectrum.tangent_transient} tangent "
@@ -203,6 +248,11 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
         )
     ]  # fmt: skip
     columns = ("#", "lambda (per unit t)", "+-", "lambda T (per cycle)", "+-")
+    floquet = document.get("floquet")
+    if floquet is not None and floquet.get("found"):
+        mark = "exact" if floquet["exact"] else "not exact"
+        columns = (*columns, f"Floquet (per unit t, {mark})")
+        rows = [(*row, f"{floquet['exponents'][i]:+.7f}") for i, row in enumerate(rows)]
     total, trace = document["sum"], document["trace"]
     if trace is None or (isinstance(trace, float) and math.isnan(trace)):
         identity = f"{total:.6g} (no trace identity: the Jacobian's trace is not known)"
@@ -218,6 +268,8 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
         ("Kaplan-Yorke dimension", f"{document['kaplan_yorke']:.4g}"
          + ("" if document["full_spectrum"] else f" (from {document['k']} exponents)")),
     ]  # fmt: skip
+    if floquet is not None:
+        summary.append(_floquet_summary(floquet, spectrum))
     two = document.get("two_trajectory")
     if two is not None:
         summary.append((
@@ -234,7 +286,7 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
         summary.append(("wrote", plot))
     blocks = [
         _table(None, header, "ll"),
-        _table(columns, rows, "rrrrr"),
+        _table(columns, rows, "r" * len(columns)),
         _table(None, summary, "ll"),
     ]
     return "\n\n".join(blocks) + "\n"

@@ -65,10 +65,22 @@ The rules, in the order :func:`classify` applies them (the same text is in
 7. Without an exponent (:func:`classify_sequence` on bare data) the 0-1 test
    decides: chaotic when K > 0.8, quasi-periodic when K < 0.2, unresolved
    between (and below 100 sections, where no K is computed).
+8. Periodic and group-periodic responses (``floquet=True``, the default): the
+   orbit is solved by Newton shooting from the last section of the record
+   window with period P (:func:`chaospound.orbits.floquet.response_floquet`:
+   rtol 1e-12, dop853, residual 1e-10 of the state scale). Its multipliers mu
+   and Floquet exponents log|mu| / (P T) are the response's Lyapunov exponents,
+   exact up to the integration tolerance (``floquet_exponents``;
+   ``evidence["floquet"]`` says how: the variational monodromy, or, for a law
+   whose tangent dynamics the engine refuses, a finite-difference one). The
+   orbit confirms the response when Newton stays within 1e-3 of the state scale
+   of the start, with the same impacts per period and corners, all |mu| < 1.
+   A failed Newton leaves the label as it is and the evidence says why.
 
 Confidence, in [0, 1]: periodic and group-periodic
 ``log10(tol / mismatch) / 2`` (1 at a mismatch 100 times below tol, 0 at
-tol); ``none`` 1 (0.5 when the motion has no period); chaotic the smaller of
+tol), 1 when the solved orbit confirms the response (rule 8), at most 0.5 when
+it contradicts it; ``none`` 1 (0.5 when the motion has no period); chaotic the smaller of
 ``(lambda / sigma - 3) / 7`` and ``(K - 0.2) / 0.6``; quasi-periodic the
 smaller of ``1 - |lambda / sigma| / 3`` and ``(0.2 - K) / 0.2``; each clipped
 to [0, 1], a piece of evidence that was not computed left out; unresolved 0.
@@ -120,6 +132,7 @@ MISMATCH_DECADES = 2.0  #: a mismatch this many decades below tol gives full con
 AMBIGUOUS_Z = (1.0, 6.0)  #: lambda / sigma in this range: rerun the exponent LONGER_RUN x longer
 LONGER_RUN = 4
 Z_FULL_CONFIDENCE = 10.0  #: lambda / sigma giving full confidence in chaos
+CONTRADICTED_CONFIDENCE = 0.5  #: at most this when the solved orbit contradicts the response
 
 
 @dataclass(frozen=True)
@@ -152,7 +165,18 @@ class Regime:
         Excitation cycles integrated before the record window.
     evidence : dict
         Further numbers: tol, scale, the mismatch of every candidate period,
-        the solver tolerances, window lengths, lambda / sigma, ...
+        the solver tolerances, window lengths, lambda / sigma, ... and, for a
+        periodic response, ``floquet``: how its orbit was solved (rule 8).
+    floquet_exponents : tuple of float or None
+        A periodic response's Floquet exponents log|mu| / (P T) (per unit
+        normalised time, descending), from its orbit solved by Newton shooting:
+        its Lyapunov exponents (rule 8). None when not computed or Newton failed.
+    floquet_multipliers : tuple of complex or None
+        The orbit's multipliers mu (eigenvalues of the monodromy of P cycles),
+        by decreasing modulus.
+    floquet_exact : bool or None
+        The exponents are exact: the orbit confirms the response and its
+        monodromy is valid (``evidence["floquet"]["note"]`` says otherwise why).
     """
 
     regime: str
@@ -166,6 +190,9 @@ class Regime:
     confidence: float = 0.0
     transient_used: int = 0
     evidence: dict = field(default_factory=dict)
+    floquet_exponents: tuple[float, ...] | None = None
+    floquet_multipliers: tuple[complex, ...] | None = None
+    floquet_exact: bool | None = None
 
     def __post_init__(self) -> None:
         if self.regime not in REGIMES:
@@ -192,6 +219,9 @@ class Regime:
             "zero_one": self.zero_one,
             "confidence": float(self.confidence),
             "transient_used": int(self.transient_used),
+            "floquet_exponents": (None if self.floquet_exponents is None
+                                  else [float(e) for e in self.floquet_exponents]),
+            "floquet_exact": self.floquet_exact,
             "evidence": _plain(self.evidence),
         }
 
@@ -208,6 +238,7 @@ def classify(
     tol: float | None = None,
     lyapunov_cycles: int = 200,
     test01: bool = True,
+    floquet: bool = True,
     progress: Callable[[str], None] | None = None,
 ) -> Regime:
     """Classify the steady response of a pounding scene.
@@ -233,6 +264,9 @@ def classify(
         Cycles averaged for the largest exponent (only without a period).
     test01 : bool
         Run the 0-1 test (only without a period).
+    floquet : bool
+        For a periodic or group-periodic response, solve its orbit by Newton
+        shooting and report the exact Floquet exponents (rule 8).
     progress : callable, optional
         Called with a short text at each stage ("transient: 400 of at most 2000
         cycles", ...), e.g. to show progress; nothing else depends on it.
@@ -321,6 +355,9 @@ def classify(
         "impacts_in_window": len(imp),
         "impacts_per_cycle": len(imp) / window,
     }
+    if regime.regime in ("periodic", "group-periodic") and floquet:
+        report(f"{regime.label}: solving the orbit for its Floquet exponents")
+        regime = _with_floquet(regime, system, record.strobe.state[-1])
     if regime.regime != "unresolved" or not len(imp):
         return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
 
@@ -361,6 +398,36 @@ def classify(
         zero_one_points=int(states.shape[0]) if test01 else 0,
     )
     return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
+
+
+def _with_floquet(regime: Regime, system: System, state: np.ndarray) -> Regime:
+    """Rule 8: the periodic response's orbit by Newton shooting, its Floquet exponents.
+
+    Newton starts from the last section of the record window (``state``, in the
+    model's units) with the response's period; the evidence gets the report
+    (:class:`chaospound.orbits.floquet.FloquetReport`). A confirmed orbit (near
+    the start, same impacts and corners, all |mu| < 1) raises the confidence to
+    1; one that contradicts the response caps it at 0.5; a failed Newton leaves
+    it and says why.
+    """
+    from ..orbits.floquet import response_floquet
+    from .system import SimulationError
+
+    try:
+        floquet = response_floquet(system, state, regime.period_cycles,
+                                   impacts_per_period=regime.impacts_per_period,
+                                   corner_sequence=tuple(regime.corner_sequence))
+    except (SimulationError, ValueError, np.linalg.LinAlgError) as exc:
+        return replace(regime, evidence={**regime.evidence, "floquet": {
+            "found": False, "exact": False, "note": f"no orbit: {exc}"}})
+    evidence = {**regime.evidence, "floquet": floquet.to_json_dict()}
+    if not floquet.found:
+        return replace(regime, evidence=evidence)
+    confidence = 1.0 if floquet.confirmed else min(regime.confidence, CONTRADICTED_CONFIDENCE)
+    return replace(regime, confidence=confidence, evidence=evidence,
+                   floquet_exponents=tuple(float(e) for e in floquet.exponents),
+                   floquet_multipliers=tuple(complex(z) for z in floquet.multipliers),
+                   floquet_exact=floquet.exact)
 
 
 # ====================================================== classify_sequence

@@ -61,6 +61,9 @@ class Spectrum:
         all exponents must equal it.
     steps, rhs_evals : int
         Work of the tangent run.
+    final_state : ndarray (n,) or None
+        The state at the last section of the run (where a periodic response's
+        orbit can be solved: :func:`chaospound.orbits.floquet.spectrum_floquet`).
     """
 
     exponents: np.ndarray
@@ -74,6 +77,7 @@ class Spectrum:
     trace: float
     steps: int
     rhs_evals: int
+    final_state: np.ndarray | None = None
 
     @property
     def per_cycle(self) -> np.ndarray:
@@ -164,7 +168,7 @@ def lyapunov_spectrum(
         augmented[n * (i + 1) + i] = 1.0
     logs = np.zeros((cycles, k))
     total = tangent_transient + cycles
-    _, _, stats = advance(system, augmented, total, tangent="qr",
+    final, _, stats = advance(system, augmented, total, tangent="qr",
                           tangent_log=logs, record_from=tangent_transient)
     period = system.period
     exponents = logs.sum(axis=0) / (cycles * period)
@@ -187,6 +191,7 @@ def lyapunov_spectrum(
         trace=_constant_trace(system),
         steps=int(stats[0]),
         rhs_evals=int(stats[2]),
+        final_state=final[:n].copy(),
     )
 
 

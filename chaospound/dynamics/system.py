@@ -474,7 +474,10 @@ def advance(system: System, state: np.ndarray, cycles: int, *, tangent: str = "n
     the state followed by tangent vectors, which are re-orthonormalised at every
     section, and the logs of the stretching factors of cycles ``record_from ..``
     go to ``tangent_log``; with "propagator" the vectors of each cycle go there
-    (see :func:`monodromy`).
+    (see :func:`monodromy`). The returned state is the one at the last section
+    even when a contact episode runs through it (the engine follows such an
+    episode past the section to record its end; ``clock`` is then where it
+    stopped).
     """
     y = np.array(state, dtype=np.float64, copy=True)
     n = y.shape[0]
@@ -496,7 +499,9 @@ def advance(system: System, state: np.ndarray, cycles: int, *, tangent: str = "n
     status = int(stats[kin.ST_STATUS])
     if status != kin.STATUS_OK:
         raise_on_failure(status, stats, clock, system.period, system.max_steps, y)
-    return y, clock, stats
+    # a contact episode under way at the last section is followed past it (to record its
+    # end): the state at the section is the strobe's last row, not y
+    return strobe[-1].copy(), clock, stats
 
 
 def monodromy(system: System, state: np.ndarray, periods: int = 1) -> tuple[np.ndarray, np.ndarray]:

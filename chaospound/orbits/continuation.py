@@ -24,8 +24,12 @@ Test functions between consecutive points (docs/orbits.md):
 * period doubling: sign change of det(M + I) (a real multiplier through -1);
 * Neimark-Sacker: the number of complex multipliers outside the unit circle
   changes; located on |mu| - 1 of the complex multiplier nearest the circle;
-* grazing: the impacts per period or the corner sequence change (an impact's
-  velocity went to 0); located by bisection on that change.
+* grazing: the impacts per period change (an impact's velocity went to 0, or
+  the minimum gap of a free flight touched 0); located by regula falsi on the
+  local minimum of the clearance nearest zero (:mod:`.grazing`, dense output,
+  signed: negative inside a contact) when it changes sign between the points,
+  else by bisection on the change; a change of the corner sequence alone
+  ("corner-change") by bisection.
 
 Every location solves the orbit again on the pseudo-arclength hyperplane
 y_a + s t_a (the same corrector) and brackets the root in s by the Illinois
@@ -42,6 +46,7 @@ import numpy as np
 
 from ..dynamics.system import SimulationError, System
 from ..scene import Scene
+from .grazing import grazing_test
 from .maps import StroboscopicMap, state_scale
 from .shooting import ORBIT_TOL, Orbit, OrbitNotFound, find_orbit, newton_fixed_point, orbit_at
 
@@ -75,7 +80,8 @@ class SpecialPoint:
     bracket : float
         Width of the final bracket in the parameter (the location's accuracy).
     test : float
-        The test function's value there (NaN for grazing).
+        The test function's value there (grazing: the clearance's minimum, in
+        the model's length unit; NaN for a corner change).
     eigenvector : ndarray or None
         Eigenvector of the critical multiplier (fold, period doubling).
     note : str
@@ -157,10 +163,17 @@ class _Point:
     iterations: int
     k: int
     orbit: Orbit | None = None
+    _clearance: float | None = None
 
     @property
     def y(self) -> np.ndarray:
         return np.append(self.x, self.lam)
+
+    def clearance(self) -> float:
+        """The grazing test function: the clearance's local minimum nearest zero."""
+        if self._clearance is None:
+            self._clearance = grazing_test(self.smap, self.x, self.k)
+        return self._clearance
 
     def get_orbit(self) -> Orbit:
         if self.orbit is None:
@@ -169,9 +182,16 @@ class _Point:
         return self.orbit
 
 
-def _evaluate(base: StroboscopicMap, x: np.ndarray, lam: float, k: int):
+def _evaluate(base: StroboscopicMap, x: np.ndarray, lam: float, k: int, *,
+              approximate: bool = False):
+    """(map at lam, P^k(x), M, dP^k/dlam); with ``approximate`` M is the map's
+    approximate monodromy (chord iterations), P^k(x) still the exact state."""
     smap = base.with_parameter(value=lam)
-    xk, m = smap.monodromy(x, k)
+    if approximate and smap.jacobian_rtol is not None:
+        xk = smap.advance(x, k)
+        _, m = smap.approximate_monodromy(x, k)
+    else:
+        xk, m = smap.monodromy(x, k)
     p_lam = smap.parameter_derivative(x, k)
     return smap, xk, m, p_lam
 
@@ -180,17 +200,19 @@ def _correct(base: StroboscopicMap, y_pred: np.ndarray, t: np.ndarray, k: int, *
              tol: float, max_iter: int = 8) -> _Point:
     """Newton on [P^k(x; lam) - x; t . (y - y_pred)] = 0 from y_pred.
 
-    Chord iterations: the bordered Jacobian of the predicted point is kept while the
-    residual falls at least fourfold per iteration (one run of k periods each), and
-    evaluated afresh otherwise; the converged point gets its own M and dP/dlambda
-    (for the tangent and the test functions).
+    Chord iterations: the bordered Jacobian of the predicted point, with the map's
+    approximate monodromy (:meth:`StroboscopicMap.approximate_monodromy`), is kept
+    while the residual falls at least fourfold per iteration (one run of k periods
+    each), and evaluated afresh otherwise; the converged point gets its own exact M
+    and dP/dlambda (for the tangent and the test functions).
     """
     n = y_pred.shape[0] - 1
     y = y_pred.copy()
     eye = np.eye(n)
     last = np.inf
-    smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
-    fresh = True
+    smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k, approximate=True)
+    fresh = True  # the Jacobian was evaluated at the current y
+    exact = smap.jacobian_rtol is None  # ... and with the exact M
     jac = None
     res = np.inf
     for it in range(max_iter + 1):
@@ -199,13 +221,13 @@ def _correct(base: StroboscopicMap, y_pred: np.ndarray, t: np.ndarray, k: int, *
         if not np.isfinite(res):
             raise OrbitNotFound("corrector: non-finite residual")
         if res <= tol:
-            if not fresh:
+            if not (fresh and exact):
                 smap, _, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
             return _Point(smap, y[:n].copy(), float(y[n]), m, p_lam, res, it, k)
         if it == max_iter or (it >= 2 and res > 0.5 * last):
             break
         if not fresh and res > 0.25 * last:  # slow chord: a fresh Jacobian
-            smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k)
+            smap, xk, m, p_lam = _evaluate(base, y[:n], float(y[n]), k, approximate=True)
             fresh = True
         if fresh:
             jac = np.zeros((n + 1, n + 1))
@@ -277,11 +299,13 @@ def _signature(o: Orbit) -> tuple:
 # ----------------------------------------------------------------- location
 def _locate(base: StroboscopicMap, a: _Point, t_a: np.ndarray, b: _Point, k: int,
             test: Callable[[_Point], float] | None, *, tol: float, locate_tol: float,
-            max_iter: int = 60) -> tuple[_Point, float]:
+            max_iter: int = 60, far_side: bool = False) -> tuple[_Point, float]:
     """Root of ``test`` (or, with None, the change of impact signature) between a and b.
 
     Points on the way solve the corrector on the hyperplane t_a . (y - y_a) = s.
-    Returns the located point and the final bracket width in the parameter.
+    Returns the located point (with ``far_side``, or without a test, the bracket's
+    end on b's side: for grazing, the orbit with the new impacts) and the final
+    bracket width in the parameter.
     """
     s_lo, s_hi = 0.0, float(t_a @ (b.y - a.y))
     p_lo, p_hi = a, b
@@ -336,7 +360,7 @@ def _locate(base: StroboscopicMap, a: _Point, t_a: np.ndarray, b: _Point, k: int
                     f_lo *= 0.5
                 side = 1
     bracket = abs(p_hi.lam - p_lo.lam)
-    if test is None:
+    if test is None or far_side:
         return p_hi, bracket  # the first point with the new impacts
     best = p_lo if abs(test(p_lo)) <= abs(test(p_hi)) else p_hi
     return best, bracket
@@ -384,9 +408,10 @@ def _specials_between(base, a: _Point, t_a, b: _Point, t_b, k, *, tol, locate, l
     """Detect (and locate) the bifurcations between consecutive points a and b."""
     found: list[SpecialPoint] = []
 
-    def add(kind, test, target=None, note=""):
+    def add(kind, test, target=None, note="", far_side=False):
         if locate:
-            p, bracket = _locate(base, a, t_a, b, k, test, tol=tol, locate_tol=locate_tol)
+            p, bracket = _locate(base, a, t_a, b, k, test, tol=tol, locate_tol=locate_tol,
+                                 far_side=far_side)
         else:
             p, bracket = b, abs(b.lam - a.lam)
         vec = None if target is None else _critical_vector(p.m, target)
@@ -408,8 +433,20 @@ def _specials_between(base, a: _Point, t_a, b: _Point, t_b, k, *, tol, locate, l
         kind = "grazing" if oa.impacts_per_period != ob.impacts_per_period else "corner-change"
         note = (f"{oa.impacts_per_period} -> {ob.impacts_per_period} impacts per period, "
                 f"corners {' '.join(oa.corners) or '-'} -> {' '.join(ob.corners) or '-'}")
-        add(kind, None, note=note)
+        test = None
+        if kind == "grazing" and _clearance_changes_sign(a, b):
+            test = _Point.clearance  # a free flight's minimum gap through zero
+            note += "; located on the clearance's minimum"
+        add(kind, test, note=note, far_side=True)
     return found
+
+
+def _clearance_changes_sign(a: _Point, b: _Point) -> bool:
+    try:
+        ca, cb = a.clearance(), b.clearance()
+    except SimulationError:
+        return False
+    return bool(np.isfinite(ca) and np.isfinite(cb) and np.sign(ca) != np.sign(cb))
 
 
 # ------------------------------------------------------------------- driver

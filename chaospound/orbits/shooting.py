@@ -2,15 +2,16 @@
 
 A period-k orbit (k forcing periods) is a fixed point of P^k, solved by
 Newton's method on F(x) = P^k(x) - x with the Jacobian M - I, M the
-monodromy matrix of the map's provider (:mod:`chaospound.orbits.maps`), kept
-from an earlier iterate while the residual falls at least twofold per
-iteration (chord steps: one run of k periods each instead of a matrix).
+monodromy matrix of the map's provider (:mod:`chaospound.orbits.maps`) at the
+looser tolerance of :meth:`StroboscopicMap.approximate_monodromy`, kept from
+an earlier iterate while the residual falls at least twofold per iteration
+(chord steps: one run of k periods each instead of a matrix); the exact matrix
+is evaluated once, at the converged state.
 Safeguards: the Newton step is cut to a trust radius (``trust`` times the
 state scale max(1, |x|_inf)) and then backtracked (halved) until the residual
 decreases; converged when |F|_inf <= tol * max(1, |x|_inf) (default 1e-10).
-The multipliers are the eigenvalues of M at the converged state (the
-evaluation that showed convergence: no extra integration), the Floquet
-exponents log|mu| / (k T) per unit normalised time.
+The multipliers are the eigenvalues of that exact M, the Floquet exponents
+log|mu| / (k T) per unit normalised time.
 """
 
 from __future__ import annotations
@@ -153,7 +154,12 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
         Keep the monodromy of an earlier iterate while the residual falls at least
         twofold per iteration (the chord method: one run of k periods per iteration
         instead of a whole matrix), and evaluate it afresh when it does not. The
-        returned matrix is always evaluated at the returned state.
+        matrices of the iterations are then the map's approximate ones
+        (:meth:`StroboscopicMap.approximate_monodromy`, looser tolerances: their
+        error only slows the chord steps' linear convergence, of rate about
+        |M_used - M(x*)|); the returned matrix is always the map's own, evaluated at
+        the returned state. Without ``chord`` every iteration evaluates the exact
+        matrix (plain Newton).
 
     Returns
     -------
@@ -170,8 +176,10 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
     eye = np.eye(n)
     res = float("nan")
     try:
-        xk, m = smap.monodromy(x, k)
-        fresh = True  # m was evaluated at x
+        if chord:
+            xk, m, fresh = smap.advance(x, k), None, False
+        else:
+            (xk, m), fresh = smap.monodromy(x, k), True
         for it in range(max_iter + 1):
             f = xk - x
             res = float(np.max(np.abs(f))) / state_scale(x)
@@ -184,6 +192,8 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                 return x, m, res, it
             if it == max_iter:
                 break
+            if m is None:
+                _, m = smap.approximate_monodromy(x, k)
             try:
                 dx = np.linalg.solve(m - eye, -f)
             except np.linalg.LinAlgError:
@@ -209,9 +219,11 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                 raise OrbitNotFound(f"period-{k} orbit: the integration failed along the "
                                     f"Newton step at iteration {it}")
             x, xk, fresh = x_try, xk_try, False
-            if not chord or norm > 0.5 * norm0:
+            if not chord:
                 xk, m = smap.monodromy(x, k)
                 fresh = True
+            elif norm > 0.5 * norm0:
+                m = None  # slow: an approximate matrix at the new iterate
     except OrbitNotFound:
         raise
     except SimulationError as exc:
