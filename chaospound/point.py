@@ -70,6 +70,7 @@ def _run(target, n_state: int, spec, index: int,
     """One point of a Scene or a System (see :func:`run_point`, :func:`run_system_point`)."""
     from .dynamics.classify import classify, classify_sequence, length_weights
     from .dynamics.lyapunov import lyapunov_spectrum
+    from .dynamics.system import as_system
     from .simulate import SimulationError, simulate
 
     started = time.perf_counter()
@@ -78,27 +79,28 @@ def _run(target, n_state: int, spec, index: int,
         values = spec.point_values(index)
         point = target.with_params(**values) if values else target
         is_scene = isinstance(point, Scene)
+        system = as_system(point)  # a scene is packed once, here
         start_phase = None
         initial = spec.initial_values(index)
         if initial:  # a basin scan: this point's own initial state (and phase)
-            start_state, start_phase = _initial_condition(point, initial)
-        sim = simulate(point, initial_state=start_state,
+            start_state, start_phase = _initial_condition(system, initial)
+        sim = simulate(system, initial_state=start_state,
                        start_at_section=start_state is not None and start_phase is None,
-                       **({} if start_phase is None else {"start_phase": start_phase}))
+                       start_phase=start_phase)
         exps = errs = None
         max_exp = max_err = None
         if n_exp:
-            spectrum = lyapunov_spectrum(point, k=n_exp, transient=0,
+            spectrum = lyapunov_spectrum(system, k=n_exp, transient=0,
                                          initial_state=sim.strobe.state[-1],
                                          cycles=spec.lyapunov_cycles, tangent_transient=10)
             exps, errs = spectrum.exponents, spectrum.errors
             max_exp, max_err = float(exps[0]), float(errs[0])
         imp = sim.impacts
         transient_used = sim.transient
-        if not is_scene and not point.has_gap:
+        if not system.has_gap:
             regime = _Unclassified(float("nan"))
         elif spec.classify == "full":
-            regime = classify(point, floquet=False)  # a sweep stores no Floquet data
+            regime = classify(system, floquet=False)  # a sweep stores no Floquet data
             if exps is None and regime.max_exponent is not None:
                 max_exp, max_err = regime.max_exponent, regime.max_exponent_error
             transient_used = regime.transient_used
@@ -136,18 +138,12 @@ def _run(target, n_state: int, spec, index: int,
         return _failed_point(index, n_state, f"{type(exc).__name__}: {exc}", started)
 
 
-def _initial_condition(point, initial: dict[str, float]) -> tuple[np.ndarray, float | None]:
-    """The start of a basin scan's point: the target's initial state with the scanned
-    components replaced, and the scanned initial phase (None: the scene's start)."""
+def _initial_condition(system, initial: dict[str, float]) -> tuple[np.ndarray, float | None]:
+    """The start of a basin scan's point: the system's initial state with the scanned
+    components replaced, and the scanned initial phase (None: the system's start)."""
     from .grid import INITIAL_PHASE
 
-    if isinstance(point, Scene):
-        from .scene import STATE_NAMES
-
-        model_id = point.model_id()
-        state, names = point.initial_vector(model_id), STATE_NAMES[model_id]
-    else:
-        state, names = np.array(point.initial_state, dtype=np.float64), point.state_names
+    state, names = np.array(system.initial_state, dtype=np.float64), system.state_names
     for name, value in initial.items():
         if name != INITIAL_PHASE:
             state[list(names).index(name)] = value

@@ -8,25 +8,21 @@ dataclasses. Nothing here knows about files, plots or the command line.
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .dynamics.system import SimulationError, System
-from .dynamics.system import raise_on_failure as _raise_on_failure
-from .engine import tables as kin
-from .engine.compose import Composition, Engine, engine_for
-from .kernels.params import (
-    MODEL_DIMS,
-    MODEL_NAMES,
-    N_PARAMS,
-    P_HALF_L,
-    P_PERIOD,
-    P_PERIOD_RATIO,
-    P_PHASE0,
+from .dynamics.system import (  # noqa: F401  (warm_up, DEFAULT_COMPOSITION re-exported)
+    DEFAULT_COMPOSITION,
+    SimulationError,
+    System,
+    as_system,
+    evolve,
+    warm_up,
 )
-from .scene import STATE_NAMES, Scene
+from .engine import tables as kin
+from .engine.compose import Composition, engine_for
+from .scene import Scene
 
 __all__ = [
     "ContactHistory",
@@ -41,7 +37,6 @@ __all__ = [
 ]
 
 CORNER_LABELS = kin.CORNER_LABELS
-_NO_TANGENT = np.zeros((0, 0))  #: tangent_log placeholder for plain runs
 
 
 @dataclass(frozen=True)
@@ -190,65 +185,17 @@ class Simulation:
         }
 
 
-@dataclass(frozen=True)
-class _SceneRun:
-    """What :func:`simulate` needs of a scene or a system."""
-
-    model_id: int
-    model: str
-    n: int
-    p: np.ndarray
-    initial_state: np.ndarray
-    state_names: tuple[str, ...]
-    solver: object  #: anything with method, rtol, atol, steps_per_cycle, max_steps, ...
-    period: float
-    t0: float
-    transient: int
-    record: int
-    name: str
-    engine: Engine
-    scene: Scene | None = None
-
-    @classmethod
-    def of_scene(cls, scene: Scene) -> _SceneRun:
-        model_id = scene.model_id()
-        return cls(model_id=model_id, model=MODEL_NAMES[model_id], n=MODEL_DIMS[model_id],
-                   p=scene.pack(model_id), initial_state=scene.initial_vector(model_id),
-                   state_names=STATE_NAMES[model_id], solver=scene.solver,
-                   period=scene.period, t0=scene.run.phase * scene.period,
-                   transient=scene.run.transient, record=scene.run.record, name=scene.name,
-                   engine=engine_for(Composition(
-                       model=MODEL_NAMES[model_id], law=scene.contact.contact_law,
-                       ground=scene.excitation.ground, method=scene.solver.method)),
-                   scene=scene)
-
-    @classmethod
-    def of_system(cls, system) -> _SceneRun:
-        if not isinstance(system, System):
-            raise TypeError(f"expected a Scene or a System, got {type(system).__name__}")
-        if system.scene is not None:
-            return cls.of_scene(system.scene.with_params(
-                method=system.method, rtol=system.rtol, atol=system.atol,
-                steps_per_cycle=system.steps_per_cycle, max_steps=system.max_steps,
-                restart_at_kinks=system.restart_at_kinks))
-        return cls(model_id=system.model_id, model=system.model_name, n=system.dim,
-                   p=system.params, initial_state=np.asarray(system.initial_state, float),
-                   state_names=tuple(system.state_names), solver=system,
-                   period=system.period, t0=float(system.params[P_PHASE0]),
-                   transient=system.transient, record=system.record, name=system.name,
-                   engine=system.engine())
-
-
 def simulate(
     scene: Scene | System,
     *,
     transient: int | None = None,
-    record: int | None = None,
+    cycles: int | None = None,
     samples_per_cycle: int = 0,
     initial_state: np.ndarray | None = None,
     start_at_section: bool = False,
     impact_capacity: int | None = None,
     start_phase: float | None = None,
+    record: int | None = None,
 ) -> Simulation:
     """Run a scene to steady state and record impacts and the stroboscopic section.
 
@@ -259,9 +206,9 @@ def simulate(
         :class:`~chaospound.dynamics.system.System`, e.g. a user's own
         (:func:`~chaospound.dynamics.system.custom_system`), run with its
         solver settings (default record window: 8 periods).
-    transient, record : int, optional
+    transient, cycles : int, optional
         Cycles discarded and recorded; default the scene's ``run`` settings
-        (paper: 40 + 8).
+        (paper: 40 + 8). ``record`` is an accepted alias of ``cycles``.
     samples_per_cycle : int
         Dense trajectory samples per excitation cycle over the record window
         (0: none). Use a few hundred for phase diagrams.
@@ -278,6 +225,8 @@ def simulate(
         [0, 1)) instead of t = 0: at the time ``start_phase T`` minus the whole
         periods that put it within one period before the first section (the
         sections stay at the scene's phase); for basins over the initial phase.
+    record : int, optional
+        The former name of ``cycles`` (give one of them).
 
     Returns
     -------
@@ -289,57 +238,29 @@ def simulate(
         When the step budget runs out, the step size underflows or the state
         becomes non-finite; the message carries the numbers.
     """
-    if isinstance(scene, Scene):
-        run = _SceneRun.of_scene(scene)
-    else:
-        run = _SceneRun.of_system(scene)
-    transient = run.transient if transient is None else int(transient)
-    record = run.record if record is None else int(record)
-    if transient < 0 or record < 1:
-        raise ValueError(f"transient = {transient}, record = {record}: need >= 0 and >= 1")
-    n, p, solver, period, name = run.n, run.p, run.solver, run.period, run.name
-    if initial_state is None:
-        y_start = run.initial_state.copy()
-    else:
-        y_start = np.asarray(initial_state, dtype=np.float64).copy()
+    system = as_system(scene)
+    if record is not None and cycles is not None and int(record) != int(cycles):
+        raise ValueError(f"record = {record}, cycles = {cycles}: give one of them")
+    cycles = record if cycles is None else cycles
+    transient = system.transient if transient is None else int(transient)
+    cycles = system.record if cycles is None else int(cycles)
+    if transient < 0 or cycles < 1:
+        raise ValueError(f"transient = {transient}, record = {cycles}: need >= 0 and >= 1")
+    n = system.dim
+    if initial_state is not None:
+        y_start = np.asarray(initial_state, dtype=np.float64)
         if y_start.shape != (n,) or not np.all(np.isfinite(y_start)):
             raise ValueError(
                 f"initial_state has shape {y_start.shape}: need {n} finite values "
-                f"({', '.join(run.state_names)})"
+                f"({', '.join(system.state_names)})"
             )
-    t0 = run.t0
-    tau_start = 0.0 if (start_at_section or t0 == 0.0) else -t0
-    if start_phase is not None:  # t0 + tau_start = start_phase T (mod T), tau_start <= 0
-        if not 0.0 <= start_phase < 1.0:
-            raise ValueError(f"start_phase = {start_phase}: must be in [0, 1)")
-        tau_start = -((t0 - start_phase * period) % period)
-    h_fixed = period / solver.steps_per_cycle
-    capacity = impact_capacity or max(64, 16 * (record + 1))
-    n_rows_traj = samples_per_cycle * record + 1 if samples_per_cycle > 0 else 1
-
-    warm_up(run.engine)
-    start = time.perf_counter()
-    while True:
-        y = y_start.copy()
-        clock = np.array([0.0, tau_start, 0.0])
-        strobe = np.full((record + 1, n), np.nan)
-        traj = np.full((n_rows_traj, n + 1), np.nan)
-        imp = np.zeros((capacity, kin.N_IMP_FIELDS))
-        imp_state = np.zeros((capacity, n))
-        stats = np.zeros(kin.N_STATS, dtype=np.int64)
-        n_imp = run.engine.run_cycles(
-            p, y, clock, transient, transient + record,
-            solver.rtol, solver.atol, h_fixed, solver.max_steps, solver.restart_at_kinks,
-            samples_per_cycle, strobe, traj, imp, imp_state, stats, _NO_TANGENT,
-        )
-        status = int(stats[kin.ST_STATUS])
-        if status != kin.STATUS_OVERFLOW:
-            break
-        capacity *= 4
-    wall = time.perf_counter() - start
-    _raise_on_failure(status, stats, clock, period, solver.max_steps, y)
-
-    rows = imp[:n_imp]
+    # every simulation starts with the packed vector as packed: a contact law's
+    # per-episode memory does not leak from one simulation into the next
+    run = evolve(replace(system, params=system.params.copy()), initial_state,
+                 transient=transient, cycles=cycles, start_at_section=start_at_section,
+                 start_phase=start_phase, impacts=True, impact_capacity=impact_capacity,
+                 samples_per_cycle=samples_per_cycle)
+    rows, states = run.impacts, run.impact_states
     impacts = Impacts(
         time=rows[:, kin.IMP_TIME].copy(),
         phase=rows[:, kin.IMP_PHASE].copy(),
@@ -350,66 +271,46 @@ def simulate(
         peak_force=rows[:, kin.IMP_PEAK_FORCE].copy(),
         duration=rows[:, kin.IMP_DURATION].copy(),
         cycle=rows[:, kin.IMP_CYCLE].astype(np.int64),
-        state=imp_state[:n_imp].copy(),
+        state=states.copy(),
     )
-    cycles = np.arange(transient, transient + record + 1)
-    strobe_obj = Strobe(cycle=cycles, time=t0 + cycles * period, state=strobe)
+    strobe = Strobe(cycle=run.cycles, time=run.section_times, state=run.sections)
     trajectory = None
-    if samples_per_cycle > 0:
-        trajectory = Trajectory(time=traj[:, 0].copy(), state=traj[:, 1:].copy())
+    if run.samples is not None:
+        trajectory = Trajectory(time=run.samples[:, 0].copy(), state=run.samples[:, 1:].copy())
+    stats = run.stats
     stats_obj = RunStats(
         steps=int(stats[kin.ST_ACCEPTED]),
         rejected=int(stats[kin.ST_REJECTED]),
         rhs_evals=int(stats[kin.ST_RHS_EVALS]),
         events=int(stats[kin.ST_EVENTS]),
-        wall_s=wall,
+        wall_s=run.wall_s,
     )
     return Simulation(
-        scene=run.scene,
-        model=run.model,
-        state_names=run.state_names,
+        scene=_scene_as_run(system),
+        model=system.model_name,
+        state_names=tuple(system.state_names),
         impacts=impacts,
-        strobe=strobe_obj,
+        strobe=strobe,
         trajectory=trajectory,
         stats=stats_obj,
-        final_state=y,
+        final_state=run.end_state,
         transient=transient,
-        record=record,
-        period=period,
-        name=name,
+        record=cycles,
+        period=system.period,
+        name=system.name,
     )
 
 
-_WARM: set = set()
-
-
-def warm_up(engine: Engine | None = None) -> None:
-    """Load (or compile) an engine once per process, outside any timing.
-
-    A tiny call makes later ``stats.wall_s`` measure the work alone. Without
-    an argument: the engine of the default scene (fig3a's composition).
-    """
-    if engine is None:
-        engine = engine_for(DEFAULT_COMPOSITION)
-    if engine.composition in _WARM:
-        return
-    n = {"wall": 2, "tower-wall": 6, "pair": 4, "towers": 12}.get(engine.composition.model)
-    if n is None:  # reference and user systems: compiled by their first real run
-        return
-    y = np.zeros(n)
-    p = np.zeros(N_PARAMS)
-    p[P_PERIOD] = 1.0
-    p[P_PERIOD_RATIO] = 1.0
-    p[P_HALF_L] = 0.5
-    stats = np.zeros(kin.N_STATS, dtype=np.int64)
-    engine.run_cycles(p, y, np.zeros(3), 0, 1, 1e-6, 1e-9, 0.1, 1, True, 0,
-                      np.zeros((2, n)), np.zeros((1, n + 1)), np.zeros((0, kin.N_IMP_FIELDS)),
-                      np.zeros((0, n)), stats, _NO_TANGENT)
-    _WARM.add(engine.composition)
-
-
-#: the composition of the default scene (the paper's towers, Hertz, sine, DOPRI5)
-DEFAULT_COMPOSITION = Composition(model="towers")
+def _scene_as_run(system: System) -> Scene | None:
+    """The system's scene with the system's solver settings (None for a custom system)."""
+    scene = system.scene
+    if scene is None:
+        return None
+    settings = {k: getattr(system, k) for k in ("method", "rtol", "atol", "steps_per_cycle",
+                                                 "max_steps", "restart_at_kinks")}
+    if all(getattr(scene.solver, k) == v for k, v in settings.items()):
+        return scene
+    return scene.with_params(**settings)
 
 
 def kernels_cached(composition: Composition | None = None) -> bool | None:

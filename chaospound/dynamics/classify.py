@@ -298,12 +298,12 @@ def classify(
         )
     window = max(4 * max_period, 32) if window is None else int(window)
     _check_arguments(min_transient, max_transient, chunk, window, max_period, lyapunov_cycles)
-    # "scene": what simulate runs, the tightened scene or custom system
-    scene, rtol_used, atol_used = _classification_scene(system)
+    # "scene": what simulate runs, the system with the tightened solver settings
+    scene, rtol_used, atol_used = _classification_system(system)
     tol = TOL_PER_RTOL * rtol_used if tol is None else _check_tol(tol)
     if system.scene is not None:
-        weights = length_weights(scene, system.state_names)
-        section_phase = scene.run.phase
+        weights = length_weights(system.scene, system.state_names)
+        section_phase = system.scene.run.phase
     else:  # a custom system: its own units, sections at t = k T
         weights = np.ones(system.dim)
         section_phase = 0.0
@@ -377,7 +377,7 @@ def classify(
         velocity = np.concatenate([velocity, extra.velocity])
         labels = labels + extra.labels
     report(f"no period: largest Lyapunov exponent over {lyapunov_cycles} cycles")
-    spectrum = lyapunov_spectrum(as_system(scene), k=1, transient=0,
+    spectrum = lyapunov_spectrum(scene, k=1, transient=0,
                                  cycles=lyapunov_cycles, initial_state=last)
     z = spectrum.max_exponent / max(spectrum.max_error, 1e-300)
     if AMBIGUOUS_Z[0] < abs(z) < AMBIGUOUS_Z[1]:
@@ -385,7 +385,7 @@ def classify(
         lyapunov_cycles = LONGER_RUN * lyapunov_cycles
         report(f"no period: largest Lyapunov exponent over {lyapunov_cycles} cycles (near "
                "the 3-sigma line)")
-        spectrum = lyapunov_spectrum(as_system(scene), k=1, transient=0,
+        spectrum = lyapunov_spectrum(scene, k=1, transient=0,
                                      cycles=lyapunov_cycles, initial_state=last)
     regime = classify_sequence(
         states * weights, cycles, local_phase, velocity, labels,
@@ -624,10 +624,11 @@ def _check_tol(tol: float) -> float:
     return tol
 
 
-def _classification_scene(system: System) -> tuple[Scene | System, float, float]:
-    """The system's scene with its solver settings, rtol <= 1e-8 (rule 1).
+def _classification_system(system: System) -> tuple[System, float, float]:
+    """The system with its solver settings tightened to rtol <= 1e-8 (rule 1).
 
-    A custom system (no scene) is returned as a system with those settings.
+    A system made from a scene keeps a scene that carries those settings (what
+    the runs report); nothing is packed again.
     """
     settings = {
         "method": system.method,
@@ -641,9 +642,10 @@ def _classification_scene(system: System) -> tuple[Scene | System, float, float]
         rtol = min(system.rtol, CLASSIFY_RTOL)
         atol = min(system.atol, ATOL_PER_RTOL * rtol)
         settings.update(rtol=rtol, atol=atol)
-    if system.scene is None:
-        return system.with_solver(**settings), rtol, atol
-    return system.scene.with_params(**settings), rtol, atol
+    tightened = system.with_solver(**settings)
+    if system.scene is not None:
+        tightened = replace(tightened, scene=system.scene.with_params(**settings))
+    return tightened, rtol, atol
 
 
 def _phase_from_section(time, cycle, period, section_phase) -> np.ndarray:

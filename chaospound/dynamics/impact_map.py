@@ -14,7 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..simulate import CORNER_LABELS, Simulation
+from ..scene import Scene
+from ..simulate import CORNER_LABELS, Simulation, simulate
+from .system import System, as_system
 
 __all__ = ["ImpactMap", "impact_map"]
 
@@ -88,20 +90,46 @@ class ImpactMap:
         }
 
 
-def impact_map(simulation: Simulation) -> ImpactMap:
+def impact_map(simulation: Simulation | System | Scene, *, transient: int | None = None,
+               cycles: int | None = None,
+               initial_state: np.ndarray | None = None) -> ImpactMap:
     """The impact sequence of a run and the pairs of its map n -> n+1.
 
     Parameters
     ----------
-    simulation : Simulation
-        A run of :func:`chaospound.simulate.simulate`; its impacts (onset in
-        the record window) in time order.
+    simulation : Simulation, System or Scene
+        A run of :func:`chaospound.simulate.simulate`, whose impacts (onset in
+        the record window) are taken in time order; or any system with contacts
+        (a Scene, a system made from one, a
+        :func:`~chaospound.dynamics.system.custom_system` with a gap function),
+        run here by :func:`~chaospound.simulate.simulate`.
+    transient, cycles : int, optional
+        The run's transient and record window, in periods (a system only;
+        default: its own).
+    initial_state : ndarray, optional
+        The run's start state (a system only).
 
     Returns
     -------
     ImpactMap
         With fewer than two impacts the pair arrays are empty (shape (0, 2)).
+
+    Raises
+    ------
+    ValueError
+        A custom system without a gap function (it has no impacts), or run
+        settings given with a Simulation.
     """
+    if not isinstance(simulation, Simulation):
+        system = as_system(simulation)
+        if not system.has_gap:
+            raise ValueError(f"system {system.name!r} has no gap function: it has no impacts "
+                             "(custom_system(rhs, jacobian, gap, ...))")
+        simulation = simulate(system, transient=transient, cycles=cycles,
+                              initial_state=initial_state)
+    elif transient is not None or cycles is not None or initial_state is not None:
+        raise ValueError("transient, cycles and initial_state set up a run: pass a System or "
+                         "a Scene, not a Simulation")
     imp = simulation.impacts
     order = np.argsort(imp.time, kind="stable")  # already in time order; be explicit
     phase = imp.phase[order].astype(np.float64)

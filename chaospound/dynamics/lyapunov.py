@@ -27,7 +27,7 @@ import numpy as np
 
 from ..kernels.params import CUSTOM
 from ..scene import Scene
-from .system import System, advance, as_system
+from .system import System, as_system, evolve
 
 __all__ = [
     "LargestExponent",
@@ -161,15 +161,11 @@ def lyapunov_spectrum(
     transient = system.transient if transient is None else int(transient)
     state = system.initial_state if initial_state is None else np.asarray(initial_state, float)
     if transient > 0:
-        state, _, _ = advance(system, state, transient, from_time_zero=initial_state is None)
-    augmented = np.zeros(n * (k + 1))
-    augmented[:n] = state
-    for i in range(k):
-        augmented[n * (i + 1) + i] = 1.0
-    logs = np.zeros((cycles, k))
-    total = tangent_transient + cycles
-    final, _, stats = advance(system, augmented, total, tangent="qr",
-                          tangent_log=logs, record_from=tangent_transient)
+        state = evolve(system, state, cycles=transient,
+                       start_at_section=initial_state is not None).state
+    run = evolve(system, state, transient=tangent_transient, cycles=cycles,
+                 start_at_section=True, tangent="qr", vectors=k)
+    logs, stats = run.tangent_log, run.stats
     period = system.period
     exponents = logs.sum(axis=0) / (cycles * period)
     blocks = _block_means(logs, n_blocks) / period
@@ -191,7 +187,7 @@ def lyapunov_spectrum(
         trace=_constant_trace(system),
         steps=int(stats[0]),
         rhs_evals=int(stats[2]),
-        final_state=final[:n].copy(),
+        final_state=run.state,
     )
 
 
@@ -227,15 +223,15 @@ def largest_exponent_two_trajectory(
     system = replace(system, params=system.params.copy())
     state = system.initial_state
     if transient > 0:
-        state, _, _ = advance(system, state, transient, from_time_zero=True)
+        state = evolve(system, cycles=transient).state
     perturbed = replace(system, params=system.params.copy())
     rng = np.random.default_rng(seed)
     direction = rng.normal(size=state.shape[0])
     other = state + separation * direction / np.linalg.norm(direction)
     logs = np.zeros(cycles)
     for c in range(cycles):
-        state, _, _ = advance(system, state, 1)
-        other, _, _ = advance(perturbed, other, 1)
+        state = evolve(system, state).state
+        other = evolve(perturbed, other).state
         delta = other - state
         norm = float(np.linalg.norm(delta))
         logs[c] = np.log(norm / separation)

@@ -16,11 +16,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..engine import tables as kin
 from ..kernels.params import P_PHASE0
 from ..scene import Scene
-from ..simulate import Simulation, simulate
-from .system import System, raise_on_failure
+from ..simulate import Simulation
+from .system import System, as_system, evolve
 
 __all__ = ["Section", "impact_section", "stroboscopic_section"]
 
@@ -95,17 +94,17 @@ def stroboscopic_section(
     phase: float = 0.0,
     transient: int | None = None,
     cycles: int = 200,
+    initial_state: np.ndarray | None = None,
+    start_at_section: bool = False,
 ) -> Section:
     """States at t = (phase + k) T, k = transient .. transient + cycles.
 
     Parameters
     ----------
     scene_or_system : Scene or System
-        A Scene runs its smallest exact model through
-        :func:`chaospound.simulate.simulate` (its ``run.phase`` replaced by
-        ``phase``); a System (e.g. a reference oscillator or a system with
-        other solver settings) runs the same integrator from its initial
-        state at t = 0.
+        Any system (a Scene runs its smallest exact model; a reference
+        oscillator; a user's own, :func:`~chaospound.dynamics.system.custom_system`),
+        integrated with its solver settings from its initial state at t = 0.
     phase : float
         Section phase as a fraction of the period, in [0, 1).
     transient : int, optional
@@ -113,6 +112,10 @@ def stroboscopic_section(
         system's ``transient``).
     cycles : int
         Cycles recorded, >= 1; the section has cycles + 1 points.
+    initial_state : ndarray, optional
+        State replacing the system's initial state.
+    start_at_section : bool
+        Start at the section time ``phase T`` instead of t = 0.
 
     Returns
     -------
@@ -126,11 +129,23 @@ def stroboscopic_section(
         raise ValueError(f"cycles = {cycles}: must be >= 1")
     if transient is not None and int(transient) < 0:
         raise ValueError(f"transient = {transient}: must be >= 0")
-    if isinstance(scene_or_system, Scene):
-        return _scene_section(scene_or_system, phase, transient, cycles)
-    if isinstance(scene_or_system, System):
-        return _system_section(scene_or_system, phase, transient, cycles)
-    raise TypeError(f"expected a Scene or a System, got {type(scene_or_system).__name__}")
+    system = as_system(scene_or_system)
+    transient = system.transient if transient is None else int(transient)
+    params = system.params.copy()
+    params[P_PHASE0] = phase * system.period
+    run = evolve(replace(system, params=params), initial_state, transient=transient,
+                 cycles=cycles, start_at_section=start_at_section)
+    return Section(
+        kind=STROBOSCOPIC,
+        times=run.section_times,
+        states=run.sections,
+        state_names=tuple(system.state_names),
+        phase=phase,
+        labels=None,
+        cycles=run.cycles,
+        period=system.period,
+        model=system.model_name,
+    )
 
 
 def impact_section(simulation: Simulation) -> Section:
@@ -157,55 +172,4 @@ def impact_section(simulation: Simulation) -> Section:
         cycles=imp.cycle.copy(),
         period=simulation.period,
         model=simulation.model,
-    )
-
-
-# ---------------------------------------------------------------- helpers
-def _scene_section(scene: Scene, phase: float, transient: int | None, cycles: int) -> Section:
-    if scene.run.phase != phase:
-        scene = scene.with_params(phase=phase)
-    sim = simulate(scene, transient=transient, record=cycles)
-    return Section(
-        kind=STROBOSCOPIC,
-        times=sim.strobe.time.copy(),
-        states=sim.strobe.state.copy(),
-        state_names=tuple(sim.state_names),
-        phase=phase,
-        labels=None,
-        cycles=sim.strobe.cycle.copy(),
-        period=sim.period,
-        model=sim.model,
-    )
-
-
-def _system_section(system: System, phase: float, transient: int | None, cycles: int) -> Section:
-    """One run of the cycle integrator from t = 0, recording every section."""
-    transient = system.transient if transient is None else int(transient)
-    period = system.period
-    params = system.params.copy()
-    params[P_PHASE0] = phase * period
-    system = replace(system, params=params)
-    n = system.dim
-    y = np.array(system.initial_state, dtype=np.float64, copy=True)
-    clock = np.array([0.0, -params[P_PHASE0], 0.0])
-    strobe = np.full((cycles + 1, n), np.nan)
-    stats = np.zeros(kin.N_STATS, dtype=np.int64)
-    system.engine().run_cycles(
-        params, y, clock, transient, transient + cycles,
-        system.rtol, system.atol, period / system.steps_per_cycle, system.max_steps,
-        system.restart_at_kinks, 0, strobe, np.zeros((1, n + 1)),
-        np.zeros((0, kin.N_IMP_FIELDS)), np.zeros((0, n)), stats, np.zeros((0, 0)),
-    )  # fmt: skip
-    raise_on_failure(int(stats[kin.ST_STATUS]), stats, clock, period, system.max_steps, y)
-    k = np.arange(transient, transient + cycles + 1)
-    return Section(
-        kind=STROBOSCOPIC,
-        times=params[P_PHASE0] + k * period,
-        states=strobe,
-        state_names=tuple(system.state_names),
-        phase=phase,
-        labels=None,
-        cycles=k,
-        period=period,
-        model=system.model_name,
     )

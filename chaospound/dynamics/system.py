@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import inspect
 import math
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -28,6 +29,7 @@ from ..kernels.params import (
     LORENZ,
     MODEL_DIMS,
     N_PARAMS,
+    P_HALF_L,
     P_PERIOD,
     P_PERIOD_RATIO,
     P_PHASE0,
@@ -41,8 +43,11 @@ from ..kernels.params import (
 from ..scene import PARAMETERS, STATE_NAMES, Scene
 from ..solvers.tableaux import METHOD_NAMES
 
-__all__ = ["SimulationError", "System", "advance", "custom_system", "duffing", "lorenz",
-           "monodromy", "raise_on_failure"]
+__all__ = ["Evolution", "SimulationError", "System", "advance", "as_system", "custom_system",
+           "duffing", "evolve", "lorenz", "monodromy", "raise_on_failure", "warm_up"]
+
+
+_NO_TANGENT = np.zeros((0, 0))  #: tangent_log placeholder of plain runs
 
 
 class SimulationError(RuntimeError):
@@ -462,46 +467,250 @@ def _require_finite(label: str, values: np.ndarray) -> None:
         raise ValueError(f"{label} gave non-finite values on the initial state")
 
 
+@dataclass(frozen=True)
+class Evolution:
+    """What one run of the engine returns (:func:`evolve`).
+
+    Attributes
+    ----------
+    state : ndarray (n,)
+        The state at the last section, ``transient + cycles``.
+    vectors : ndarray (k, n) or None
+        The tangent vectors at the last section of a tangent run (orthonormal
+        after a "qr" run's re-orthonormalisation, the unit vectors after a
+        "propagator" run's reset).
+    end_state : ndarray (n,)
+        Where the engine stopped: the last section's state, or, when a contact
+        episode runs through that section, the state at its end (the engine
+        follows it to record its peak and duration).
+    clock : ndarray (3,)
+        ``[k, tau, h]`` where the engine stopped (``end_state``): section index,
+        local time after it (normalised time) and the next step size.
+    stats : ndarray of int64
+        Counters of :mod:`chaospound.engine.tables` (``ST_*``); status OK.
+    cycles : ndarray of int (cycles + 1,)
+        Indices k of the recorded sections, ``transient .. transient + cycles``.
+    section_times : ndarray (cycles + 1,)
+        Their times ``t0 + k T`` (normalised time, t0 the section's time origin).
+    sections : ndarray (cycles + 1, n)
+        The states at those sections (the stroboscopic section).
+    impacts : ndarray (n_impacts, N_IMP_FIELDS)
+        Impact table (:mod:`chaospound.engine.tables`, ``IMP_*``) of the onsets in
+        the record window; empty unless ``impacts=True``.
+    impact_states : ndarray (n_impacts, n)
+        The states at those onsets.
+    samples : ndarray (rows, n + 1) or None
+        Dense samples of the record window, column 0 the time (``samples_per_cycle``).
+    tangent_log : ndarray or None
+        A tangent run's per-cycle record of the window, one row per cycle: "qr",
+        ``log R_ii`` of the k vectors' re-orthonormalisation, shape
+        (cycles, k); "propagator", the vectors at the section before their reset
+        to the unit vectors, shape (cycles, k n) (row reshaped (k, n): the
+        transposed propagator of that cycle).
+    wall_s : float
+        Wall time of the run (s), compilation excluded.
+    """
+
+    state: np.ndarray
+    vectors: np.ndarray | None
+    end_state: np.ndarray
+    clock: np.ndarray
+    stats: np.ndarray
+    cycles: np.ndarray
+    section_times: np.ndarray
+    sections: np.ndarray
+    impacts: np.ndarray
+    impact_states: np.ndarray
+    samples: np.ndarray | None
+    tangent_log: np.ndarray | None
+    wall_s: float
+
+    @property
+    def steps(self) -> int:
+        """Accepted steps."""
+        return int(self.stats[kin.ST_ACCEPTED])
+
+    @property
+    def augmented_state(self) -> np.ndarray:
+        """The state at the last section followed by the tangent vectors."""
+        if self.vectors is None:
+            return self.state
+        return np.concatenate((self.state, self.vectors.ravel()))
+
+
+TANGENTS = ("none", "qr", "propagator")  #: the tangent modes of :func:`evolve`
+
+
+def evolve(system: System | Scene, initial_state: np.ndarray | None = None, *,
+           transient: int = 0, cycles: int = 1, start_at_section: bool | None = None,
+           start_phase: float | None = None, tangent: str = "none",
+           vectors: int | None = None, impacts: bool = False,
+           impact_capacity: int | None = None, samples_per_cycle: int = 0) -> Evolution:
+    """Integrate a system through ``transient + cycles`` periods: the one engine entry.
+
+    Every analysis runs the engine through this function. The run goes from
+    its start to the section ``transient + cycles`` (sections are the times
+    ``t0 + k T``, t0 the section's time origin ``phase T``); the record window
+    is the last ``cycles`` periods, whose sections, impacts and dense samples
+    are returned. Contact events are located and landed on
+    (docs/model.md sections 8, 10).
+
+    Parameters
+    ----------
+    system : System or Scene
+        What to integrate, with its solver settings (a Scene becomes
+        :meth:`System.from_scene`). The packed vector ``system.params`` is used
+        in place: a contact law's per-episode memory (hertzdamp's onset
+        velocity) is written there and carries over to the next run of the same
+        system, as a continued trajectory needs.
+    initial_state : ndarray, optional
+        The start state (default: the system's initial state). In a tangent
+        run it may also hold tangent vectors after the state (n (k + 1)
+        values); a plain state of n values gets ``vectors`` unit vectors.
+    transient : int
+        Periods integrated before the record window (>= 0).
+    cycles : int
+        Periods of the record window (>= 0 in a plain run).
+    start_at_section : bool, optional
+        Start at the section time t0 (local time 0) instead of t = 0; default:
+        at the section when ``initial_state`` is given (a section state, e.g.
+        of an earlier run), at t = 0 otherwise (the system's initial state).
+    start_phase : float, optional
+        Start at forcing phase ``start_phase`` (a fraction of the period, in
+        [0, 1)) instead: at the time ``start_phase T`` minus the whole periods
+        that put it within one period before the first section (the sections
+        stay where they are); basins over the initial phase use it.
+    tangent : {"none", "qr", "propagator"}
+        Carry tangent vectors (the variational equations ``V' = J V``,
+        docs/model.md section 12): "qr" re-orthonormalises them at every
+        section and logs the stretching factors of the window's cycles (the
+        Lyapunov exponents); "propagator" stores them at every section of the
+        window and resets them to the unit vectors (monodromy matrices).
+    vectors : int, optional
+        Number of tangent vectors added to a plain state (default: n).
+    impacts : bool
+        Record the impacts of the window (the table grows as needed; an
+        episode still running at the window's end is followed to its release).
+    impact_capacity : int, optional
+        Initial size of the impact table.
+    samples_per_cycle : int
+        Dense samples per period over the record window (0: none).
+
+    Returns
+    -------
+    Evolution
+
+    Raises
+    ------
+    SimulationError
+        The step budget ran out, the step size underflowed or the state became
+        non-finite; the message carries the numbers.
+    ValueError
+        Bad counts, a state of the wrong size, an unknown tangent mode.
+    """
+    system = as_system(system)
+    transient, cycles = int(transient), int(cycles)
+    if transient < 0 or cycles < 0:
+        raise ValueError(f"transient = {transient}, cycles = {cycles}: need >= 0")
+    if tangent not in TANGENTS:
+        raise ValueError(f"tangent = {tangent!r}: need one of {', '.join(TANGENTS)}")
+    n = system.dim
+    given = initial_state is not None
+    start = system.initial_state if initial_state is None else initial_state
+    y = np.array(start, dtype=np.float64, copy=True).ravel()
+    if tangent == "none" and y.shape[0] != n:
+        raise ValueError(f"initial_state has {y.shape[0]} values: need {n} "
+                         f"({', '.join(system.state_names)})")
+    if tangent != "none" and y.shape[0] == n:
+        k_vectors = n if vectors is None else int(vectors)
+        if not 1 <= k_vectors <= n:
+            raise ValueError(f"vectors = {k_vectors}: need 1 .. {n}")
+        augmented = np.zeros(n * (k_vectors + 1))
+        augmented[:n] = y
+        for i in range(k_vectors):
+            augmented[n * (i + 1) + i] = 1.0
+        y = augmented
+    if tangent != "none" and (y.shape[0] % n or y.shape[0] < 2 * n):
+        raise ValueError(f"initial_state has {y.shape[0]} values: a tangent run needs the "
+                         f"{n} states followed by k tangent vectors of {n}")
+    k_vectors = y.shape[0] // n - 1
+    if start_at_section is None:
+        start_at_section = given
+    params = system.params
+    t0 = float(params[P_PHASE0])
+    tau_start = 0.0 if (start_at_section or t0 == 0.0) else -t0
+    if start_phase is not None:  # t0 + tau_start = start_phase T (mod T), tau_start <= 0
+        if not 0.0 <= start_phase < 1.0:
+            raise ValueError(f"start_phase = {start_phase}: must be in [0, 1)")
+        tau_start = -((t0 - start_phase * system.period) % system.period)
+    k_record, k_end = transient, transient + cycles
+    n_rows = samples_per_cycle * cycles + 1 if samples_per_cycle > 0 else 1
+    width = {"none": 0, "qr": k_vectors, "propagator": k_vectors * n}[tangent]
+    log = np.zeros((cycles, width)) if tangent != "none" else _NO_TANGENT
+    capacity = (impact_capacity or max(64, 16 * (cycles + 1))) if impacts else 0
+    engine = system.engine(tangent)
+    if tangent == "none":
+        warm_up(engine)
+    y_start = y
+    started = time.perf_counter()
+    while True:
+        y = y_start.copy()
+        clock = np.array([0.0, tau_start, 0.0])
+        strobe = np.full((cycles + 1, y.shape[0]), np.nan)
+        traj = np.full((n_rows, y.shape[0] + 1), np.nan)
+        imp = np.zeros((capacity, kin.N_IMP_FIELDS))
+        imp_state = np.zeros((capacity, y.shape[0]))
+        stats = np.zeros(kin.N_STATS, dtype=np.int64)
+        n_imp = engine.run_cycles(params, y, clock, k_record, k_end, system.rtol, system.atol,
+                                  system.period / system.steps_per_cycle, system.max_steps,
+                                  system.restart_at_kinks, samples_per_cycle, strobe, traj,
+                                  imp, imp_state, stats, log)
+        status = int(stats[kin.ST_STATUS])
+        if status != kin.STATUS_OVERFLOW:
+            break
+        capacity *= 4
+    wall = time.perf_counter() - started
+    raise_on_failure(status, stats, clock, system.period, system.max_steps, y)
+    k = np.arange(k_record, k_end + 1)
+    return Evolution(
+        state=strobe[-1, :n].copy(),
+        vectors=strobe[-1, n:].reshape(k_vectors, n).copy() if k_vectors else None,
+        end_state=y[:n].copy() if k_vectors else y,
+        clock=clock,
+        stats=stats,
+        cycles=k,
+        section_times=t0 + k * system.period,
+        sections=strobe[:, :n] if k_vectors else strobe,
+        impacts=imp[:n_imp],
+        impact_states=imp_state[:n_imp, :n],
+        samples=traj if samples_per_cycle > 0 else None,
+        tangent_log=log if tangent != "none" else None,
+        wall_s=wall,
+    )
+
+
 def advance(system: System, state: np.ndarray, cycles: int, *, tangent: str = "none",
             tangent_log: np.ndarray | None = None, record_from: int | None = None,
             from_time_zero: bool = False):
     """Integrate ``cycles`` periods from a section; return (state, clock, stats).
 
-    The run starts at the section (local time 0), or at t = 0 with
-    ``from_time_zero`` (the scene's initial state), and ends on the section
-    ``cycles`` periods later; contact events are landed on as in
-    :func:`chaospound.simulate.simulate`. With ``tangent`` "qr", ``state`` holds
-    the state followed by tangent vectors, which are re-orthonormalised at every
-    section, and the logs of the stretching factors of cycles ``record_from ..``
-    go to ``tangent_log``; with "propagator" the vectors of each cycle go there
-    (see :func:`monodromy`). The returned state is the one at the last section
-    even when a contact episode runs through it (the engine follows such an
-    episode past the section to record its end; ``clock`` is then where it
-    stopped).
+    A thin face of :func:`evolve` for the map-like callers (orbits, the
+    two-trajectory exponent): the run starts at the section (local time 0),
+    or at t = 0 with ``from_time_zero`` (the system's initial state), and ends
+    on the section ``cycles`` periods later. With ``tangent`` "qr" or
+    "propagator", ``state`` holds the state followed by tangent vectors and
+    the returned state too; the log of cycles ``record_from ..`` (default:
+    none) is copied into ``tangent_log`` when given. The returned state is the
+    one at the last section even when a contact episode runs through it (the
+    engine follows such an episode past the section to record its end;
+    ``clock`` is then where it stopped).
     """
-    y = np.array(state, dtype=np.float64, copy=True)
-    n = y.shape[0]
-    clock = np.zeros(3)
-    if from_time_zero:
-        clock[1] = -system.params[P_PHASE0]
-    k_record = cycles if record_from is None else record_from
-    strobe = np.zeros((cycles - k_record + 1, n))
-    traj = np.zeros((1, n + 1))
-    imp = np.zeros((0, kin.N_IMP_FIELDS))  # no impact table: nothing recorded
-    imp_state = np.zeros((0, n))
-    stats = np.zeros(kin.N_STATS, dtype=np.int64)
-    log = np.zeros((0, 0)) if tangent_log is None else tangent_log
-    h_fixed = system.period / system.steps_per_cycle
-    system.engine(tangent).run_cycles(system.params, y, clock, k_record, cycles, system.rtol,
-                                      system.atol, h_fixed, system.max_steps,
-                                      system.restart_at_kinks, 0, strobe, traj, imp, imp_state,
-                                      stats, log)
-    status = int(stats[kin.ST_STATUS])
-    if status != kin.STATUS_OK:
-        raise_on_failure(status, stats, clock, system.period, system.max_steps, y)
-    # a contact episode under way at the last section is followed past it (to record its
-    # end): the state at the section is the strobe's last row, not y
-    return strobe[-1].copy(), clock, stats
+    record_from = cycles if record_from is None else int(record_from)
+    run = evolve(system, state, transient=record_from, cycles=cycles - record_from,
+                 start_at_section=not from_time_zero, tangent=tangent)
+    if tangent_log is not None and run.tangent_log is not None:
+        tangent_log[...] = run.tangent_log
+    return run.augmented_state, run.clock, run.stats
 
 
 def monodromy(system: System, state: np.ndarray, periods: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -518,18 +727,12 @@ def monodromy(system: System, state: np.ndarray, periods: int = 1) -> tuple[np.n
     -------
     (state, matrix) : (ndarray (n,), ndarray (n, n))
     """
+    run = evolve(system, state, cycles=periods, start_at_section=True, tangent="propagator")
     n = system.dim
-    augmented = np.zeros(n * (n + 1))
-    augmented[:n] = state
-    for i in range(n):
-        augmented[n * (i + 1) + i] = 1.0
-    log = np.zeros((periods, n * n))
-    y, _, _ = advance(system, augmented, periods, tangent="propagator", tangent_log=log,
-                      record_from=0)
     matrix = np.eye(n)
-    for row in log:
+    for row in run.tangent_log:
         matrix = row.reshape(n, n).T @ matrix
-    return y[:n].copy(), matrix
+    return run.state, matrix
 
 
 def raise_on_failure(status, stats, clock, period, max_steps, y) -> None:
@@ -547,3 +750,36 @@ def raise_on_failure(status, stats, clock, period, max_steps, y) -> None:
     else:
         msg = f"state became non-finite {where} ({done})"
     raise SimulationError(msg)
+
+
+_WARM: set = set()
+
+
+def warm_up(engine: Engine | None = None) -> None:
+    """Load (or compile) an engine once per process, outside any timing.
+
+    A tiny call makes later wall times (``Evolution.wall_s``) measure the work
+    alone. Without an argument: the engine of the default scene (fig3a's
+    composition).
+    """
+    if engine is None:
+        engine = engine_for(DEFAULT_COMPOSITION)
+    if engine.composition in _WARM:
+        return
+    n = {"wall": 2, "tower-wall": 6, "pair": 4, "towers": 12}.get(engine.composition.model)
+    if n is None or engine.composition.tangent != "none":
+        return  # reference, user and tangent engines: compiled by their first real run
+    y = np.zeros(n)
+    p = np.zeros(N_PARAMS)
+    p[P_PERIOD] = 1.0
+    p[P_PERIOD_RATIO] = 1.0
+    p[P_HALF_L] = 0.5
+    stats = np.zeros(kin.N_STATS, dtype=np.int64)
+    engine.run_cycles(p, y, np.zeros(3), 0, 1, 1e-6, 1e-9, 0.1, 1, True, 0,
+                      np.zeros((2, n)), np.zeros((1, n + 1)), np.zeros((0, kin.N_IMP_FIELDS)),
+                      np.zeros((0, n)), stats, _NO_TANGENT)
+    _WARM.add(engine.composition)
+
+
+#: the composition of the default scene (the paper's towers, Hertz, sine, DOPRI5)
+DEFAULT_COMPOSITION = Composition(model="towers")

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..dynamics.system import System, advance, as_system, monodromy
+from ..dynamics.system import System, as_system, evolve, monodromy
 from ..scene import Scene
 
 __all__ = [
@@ -296,8 +296,7 @@ class StroboscopicMap:
         SimulationError
             A failed integration (step budget, underflow, non-finite state).
         """
-        y, _, _ = advance(self.system, np.asarray(x, dtype=np.float64), int(k))
-        return y
+        return evolve(self.system, np.asarray(x, dtype=np.float64), cycles=int(k)).state
 
     def monodromy(self, x: np.ndarray, k: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """(P^k(x), d P^k / d x) from the map's monodromy provider."""
@@ -370,8 +369,7 @@ class StroboscopicMap:
         cycles = system.transient if transient is None else int(transient)
         if cycles <= 0:
             return np.array(system.initial_state, dtype=np.float64)
-        y, _, _ = advance(system, system.initial_state, cycles, from_time_zero=True)
-        return y
+        return evolve(system, cycles=cycles).state
 
 
 def _scene_value(scene: Scene, name: str) -> float:
