@@ -19,7 +19,7 @@ The event quantities are numbered (data, not kinds): 0, 1 the penetrations
 d_lo, d_hi; 2, 3 their rates; 4 the rate of the resultant contact force.
 """
 
-from chaospound.kernels.free import DENSE_ROWS, model_ends, model_force_rate
+from chaospound.kernels.free import DENSE_ROWS, N_BASE, model_ends, model_force_rate
 from chaospound.kernels.jit import kernel
 from chaospound.solvers.dense import dense_eval
 
@@ -35,8 +35,13 @@ FORCE_RATE = 4  #: number of the contact force's rate among the event quantities
 
 @kernel
 def end_value(q, y, t, h, theta, p, which, work, ends):
-    """Event quantity ``which`` at t + theta h; the interpolated state is left in ``work``."""
-    dense_eval(DENSE_ROWS, q, y, h, theta, work)
+    """Event quantity ``which`` at t + theta h; the interpolated state is left in ``work``.
+
+    Only the model's state (the first N_BASE components) is interpolated: the
+    event quantities do not depend on the tangent vectors that follow it in a
+    tangent run, whose part of ``work`` is left as it was.
+    """
+    dense_eval(DENSE_ROWS, q, y[:N_BASE], h, theta, work)
     model_ends(t + theta * h, work, p, ends)
     if which == FORCE_RATE:
         return model_force_rate(t + theta * h, work, p, ends)

@@ -195,9 +195,10 @@ def model_trace(p):
     return tr
 
 
-@kernel
+@inline
 def model_linearize(t, y, p):
-    """State-dependent coefficients of ``J(t, y)`` (a 9-tuple of floats)."""
+    """State-dependent coefficients of ``J(t, y)`` (a 17-tuple of floats), inlined into
+    the tangent right-hand side."""
     th_a = y[4]
     th_b = y[10]
     y_c = p[P_Y_C]
@@ -214,9 +215,14 @@ def model_linearize(t, y, p):
             y[3], y[9], y[5], y[11])
 
 
-@kernel
+@inline
 def model_jvp(p, lin, v, out):
-    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`."""
+    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`.
+
+    Inlined into the tangent right-hand side's loop over the vectors: a call
+    would pass the 17 coefficients and three arrays field by field for each
+    vector (benchmarks/bench_lyapunov.py, results/bench_lyapunov.json).
+    """
     structural_jvp(p, TOWER_A, v, out, 0)
     structural_jvp(p, TOWER_B, v, out, 6)
     force, fc, fs, mc, ms, th_a, th_b, arm_a, arm_b = lin[:9]
