@@ -209,3 +209,50 @@ def test_impact_map_without_impacts(capsys):
                          "--transient", "5", "--record", "2")
     assert code == 0, err
     assert "0 impacts in the record window: no pair n -> n+1" in out
+
+
+# ------------------------------------------------- a user's system, FILE.py:ATTR
+def test_section_and_impact_map_of_a_system_file_are_the_library_bitwise(
+        capsys, tmp_path, saved):
+    """``section`` and ``impact-map`` take FILE.py:ATTR like simulate and classify: the
+    JSON is the library's stroboscopic_section and impact_map of the loaded system."""
+    from test_sweep_system import SYSTEM_FILE
+
+    from chaospound.userfile import load_system
+
+    file = tmp_path / "stop.py"
+    file.write_text(SYSTEM_FILE)
+    spec = f"{file}:system"
+    system = load_system(spec).with_params(gap=0.8)
+    doc = run_json(capsys, "section", spec, "--set", "gap=0.8", "--transient", "30",
+                   "--cycles", "6", "--quiet")
+    section = stroboscopic_section(system, transient=30, cycles=6)
+    np.testing.assert_array_equal(np.array(doc["states"]), section.states)
+    np.testing.assert_array_equal(np.array(doc["times"]), section.times)
+    assert doc["model"] == "custom" and doc["state_names"] == ["x", "dx"]
+    assert doc["system"]["parameter_values"]["gap"] == 0.8 and "scene" not in doc
+    doc = run_json(capsys, "impact-map", spec, "--set", "gap=0.8", "--transient", "30",
+                   "--record", "4", "--quiet")
+    imap = impact_map(system, transient=30, cycles=4)
+    assert len(imap) >= 4 and doc["pairs"] == imap.to_json_dict()["pairs"]
+    assert {row["corner"] for row in doc["impacts"]} == {"face"}
+    # the text reports name the system; its units are its own
+    code, out, err = run(capsys, "section", spec, "--transient", "30", "--cycles", "3",
+                         "--quiet")
+    assert code == 0 and "custom (2 states: x dx)" in out and "A_g" not in out, err
+    figure = tmp_path / "map.png"
+    code, out, err = run(capsys, "impact-map", spec, "--record", "3", "--quiet", "--plot",
+                         str(figure))
+    assert code == 0 and "phase n+1" in out and "A_g" not in out, err
+    assert "stop" in saved[str(figure)].get_suptitle()
+
+
+def test_impact_map_of_a_system_without_gap_is_one_line_exit_2(capsys, tmp_path):
+    from test_sweep_system import SYSTEM_FILE
+
+    file = tmp_path / "smooth.py"
+    file.write_text(SYSTEM_FILE + "\nsmooth = custom_system(rhs, jacobian, params=(0.06, 1.0, "
+                    "1000.0, 0.7), period=1.0, initial_state=(0.0, 0.0))\n")
+    code, out, err = run(capsys, "impact-map", f"{file}:smooth")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "has no gap function" in err

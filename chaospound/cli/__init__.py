@@ -17,9 +17,9 @@ Commands::
 Every command that runs a scene takes the same scene options, added by
 :func:`add_scene_options` and turned into a validated
 :class:`~chaospound.scene.Scene` by :func:`scene_from_args`; later commands
-(lyapunov, classify, sweep, plot, bench) reuse both. ``simulate``, ``classify``,
-``lyapunov`` and ``sweep`` also take a user's system, ``FILE.py:ATTR`` in place
-of the scene file (:func:`target_from_args`, :mod:`chaospound.userfile`).
+(lyapunov, classify, sweep, plot, bench) reuse both. ``simulate``, ``section``,
+``impact-map``, ``classify``, ``lyapunov`` and ``sweep`` also take a user's system,
+``FILE.py:ATTR`` in place of the scene file (:func:`target_from_args`, :mod:`chaospound.userfile`).
 
 Exit codes: 0 success; 1 a numerical failure
 (:class:`~chaospound.simulate.SimulationError`); 2 bad input (usage, scene

@@ -5,12 +5,25 @@ from __future__ import annotations
 
 import argparse
 
-from chaospound.cli.files import _save_figure
-from chaospound.cli.options import _scene_for_run, add_output_options, add_scene_options
-from chaospound.cli.output import EXIT_OK, _emit, _json_text, _table, _with_units
-from chaospound.cli.reports import _emit_report, _scene_rows, _solver_text
+from chaospound.cli.files import _save_figure, check_figure_path
+from chaospound.cli.options import (
+    _engine_of,
+    _is_system,
+    _system_warm,
+    add_output_options,
+    add_scene_options,
+    target_from_args,
+)
+from chaospound.cli.output import EXIT_OK, CliError, _emit, _json_text, _table, _with_units
+from chaospound.cli.reports import (
+    _emit_report,
+    _scene_rows,
+    _solver_text,
+    _system_document,
+    _system_header,
+)
 from chaospound.cli.simulate import _run_simulation
-from chaospound.cli.status import _Status
+from chaospound.cli.status import _load_kernels, _Status
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -21,7 +34,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "the map n -> n+1 of consecutive impacts: (phase_n, V_n) -> (phase_n+1, V_n+1), "
         "with the corners. A response with n impacts per period repeats every n impacts "
         "(n fixed points of the n-th iterate); a chaotic one spreads over a curve or a "
-        "cloud. --record sets the cycles recorded.",
+        "cloud. --record sets the cycles recorded. A system FILE.py:ATTR with a gap function "
+        "(docs/custom_systems.md) runs likewise.",
     )
     add_scene_options(parser)
     add_output_options(parser, plot_help="draw the impact sequence and the return maps of "
@@ -32,8 +46,17 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 def _cmd_impact_map(args: argparse.Namespace) -> int:
     from chaospound.dynamics.impact_map import impact_map
 
-    scene = _scene_for_run(args)
-    cycles = f"{scene.run.transient} transient + {scene.run.record} recorded cycles"
+    scene = target_from_args(args)
+    system = scene if _is_system(scene) else None
+    if system is not None and not system.has_gap:
+        raise CliError(f"system {system.name!r} has no gap function: it has no impacts "
+                       "(custom_system(rhs, jacobian, gap, ...))")
+    if args.plot is not None:
+        check_figure_path(args.plot)
+    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
+    transient, record = ((system.transient, system.record) if system is not None
+                         else (scene.run.transient, scene.run.record))
+    cycles = f"{transient} transient + {record} recorded cycles"
     with _Status(f"running {scene.name}: {cycles}", quiet=args.quiet):
         sim = _run_simulation(scene, 0)
     imap = impact_map(sim)
@@ -41,22 +64,30 @@ def _cmd_impact_map(args: argparse.Namespace) -> int:
         from chaospound.plot import plot_impact_map
 
         fig = plot_impact_map(imap)
-        fig.suptitle(f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}: "
-                     f"{fig.get_suptitle()}, cycles {sim.transient}-"
+        what = (scene.name if system is not None else
+                f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}")
+        fig.suptitle(f"{what}: {fig.get_suptitle()}, cycles {sim.transient}-"
                      f"{sim.transient + sim.record - 1}")
         _save_figure(fig, args.plot)
     document = _with_units(imap.to_json_dict())
     document["transient_cycles"] = sim.transient
     document["record_cycles"] = sim.record
-    document["scene"] = scene.to_dict()
+    if system is not None:
+        document["system"] = _system_document(system)
+    else:
+        document["scene"] = scene.to_dict()
     if args.json:
         _emit(_json_text(document))
         return EXIT_OK
-    header = [
-        *_scene_rows(scene, sim.model, sim.period),
-        ("cycles", f"{sim.transient} transient + {sim.record} recorded"),
-        ("solver", _solver_text(scene.solver)),
-    ]  # fmt: skip
+    cycles_row = ("cycles", f"{sim.transient} transient + {sim.record} recorded")
+    if system is not None:
+        header = [*_system_header(system), cycles_row]
+    else:
+        header = [
+            *_scene_rows(scene, sim.model, sim.period),
+            cycles_row,
+            ("solver", _solver_text(scene.solver)),
+        ]  # fmt: skip
     blocks = [_table(None, header, "ll")]
     labels = imap.labels
     if len(imap) >= 2:
@@ -65,7 +96,8 @@ def _cmd_impact_map(args: argparse.Namespace) -> int:
                  f"{imap.velocity[i + 1]:.6g}") for i in range(len(imap) - 1)]
         columns = ("n", "cycle", "corner n", "phase n", "V n", "corner n+1", "phase n+1",
                    "V n+1")
-        units = ("", "", "", "of T", "A_g omega_Ax", "", "of T", "A_g omega_Ax")
+        speed = "" if system is not None else "A_g omega_Ax"
+        units = ("", "", "", "of T", speed, "", "of T", speed)
         blocks.append(_table(columns, [units, *rows], "rrlrrlrr"))
     else:
         blocks.append(f"{len(imap)} impact{'' if len(imap) == 1 else 's'} in the record "

@@ -10,9 +10,8 @@ import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from chaospound.cli.files import check_figure_path
 from chaospound.cli.output import CliError, _note, _path
-from chaospound.cli.status import STATUS_DELAY_S, _load_kernels
+from chaospound.cli.status import STATUS_DELAY_S
 from chaospound.messages import shorten
 
 if TYPE_CHECKING:
@@ -43,8 +42,9 @@ def add_scene_options(parser: argparse.ArgumentParser, *, run: bool = True) -> N
     group = parser.add_argument_group("scene")
     group.add_argument(
         "scene_file", nargs="?", metavar="SCENE.toml",
-        help="scene file (see 'chaospound presets'); simulate, classify, lyapunov and sweep "
-        "also take FILE.py:ATTR, a System defined in a Python file (docs/custom_systems.md)"
+        help="scene file (see 'chaospound presets'); simulate, section, impact-map, classify, "
+        "lyapunov and sweep also take FILE.py:ATTR, a System defined in a Python file "
+        "(docs/custom_systems.md)"
     )
     group.add_argument("--preset", metavar="NAME", help="a bundled scene instead of a file")
     group.add_argument(
@@ -111,7 +111,8 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
     preset, path = args.preset, args.scene_file
     if is_system_spec(path):
         raise CliError(f"{_path(path)}: this command takes a scene (--preset NAME or SCENE.toml); "
-                       "a system FILE.py:ATTR runs with simulate, classify, lyapunov and sweep")
+                       "a system FILE.py:ATTR runs with simulate, section, impact-map, classify, "
+                       "lyapunov and sweep")
     if preset is not None and path is not None:
         raise CliError(f"give --preset {shorten(preset)} or the scene file {_path(path)}, not both")
     if preset is None and path is None:
@@ -242,15 +243,6 @@ def _note_file_defaults(path: str, scene: Scene) -> None:
           "every default: 'chaospound params')")
 
 
-def _scene_for_run(args: argparse.Namespace) -> Scene:
-    """The scene of a run command, its --plot path checked, the kernels loaded."""
-    scene = scene_from_args(args)
-    if args.plot is not None:
-        check_figure_path(args.plot)
-    _load_kernels(args.quiet, engine=_engine_of(scene))
-    return scene
-
-
 def _positive_float(text: str) -> float:
     """argparse type: a number > 0."""
     try:
@@ -287,9 +279,9 @@ def _system_warm(target):
         return None
 
     def warm() -> None:
-        from chaospound.dynamics.system import advance
+        from chaospound.dynamics.system import evolve
 
-        advance(target, target.initial_state, 1, from_time_zero=True)
+        evolve(target, cycles=1)
     return warm
 
 

@@ -5,17 +5,27 @@ from __future__ import annotations
 
 import argparse
 
-from chaospound.cli.files import _save_figure
+from chaospound.cli.files import _save_figure, check_figure_path
 from chaospound.cli.options import (
     _count,
+    _engine_of,
+    _is_system,
     _positive_float,
-    _scene_for_run,
+    _system_warm,
     add_output_options,
     add_scene_options,
+    target_from_args,
 )
 from chaospound.cli.output import EXIT_OK, _emit, _json_text, _table, _with_units
-from chaospound.cli.reports import _emit_report, _scene_rows, _solver_text, _state_unit
-from chaospound.cli.status import _Status
+from chaospound.cli.reports import (
+    _emit_report,
+    _scene_rows,
+    _solver_text,
+    _state_unit,
+    _system_document,
+    _system_header,
+)
+from chaospound.cli.status import _load_kernels, _Status
 
 #: relative distance (to the section's size) within which two section points are one
 SECTION_TOL = 1e-6
@@ -31,7 +41,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "(T the excitation period): a response of period P cycles gives P distinct points, "
         "a quasi-periodic one a closed curve, a chaotic one a cloud. The report counts the "
         "distinct points. --transient sets the cycles discarded first (the scene's, 40 "
-        "for the presets).",
+        "for the presets). A system FILE.py:ATTR (docs/custom_systems.md) is sectioned at "
+        "t = k T.",
     )
     add_scene_options(parser)
     group = parser.add_argument_group("section")
@@ -48,17 +59,25 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 def _cmd_section(args: argparse.Namespace) -> int:
     from chaospound.dynamics.poincare import stroboscopic_section
 
-    scene = _scene_for_run(args)
-    with _Status(f"section of {scene.name}: {scene.run.transient} transient + {args.cycles} "
+    scene = target_from_args(args)
+    system = scene if _is_system(scene) else None
+    if args.plot is not None:
+        check_figure_path(args.plot)
+    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
+    transient = system.transient if system is not None else scene.run.transient
+    phase = 0.0 if system is not None else scene.run.phase  # a system's: t = k T
+    with _Status(f"section of {scene.name}: {transient} transient + {args.cycles} "
                  "cycles", quiet=args.quiet):
-        section = stroboscopic_section(scene, phase=scene.run.phase, cycles=args.cycles)
+        section = stroboscopic_section(scene, phase=phase, cycles=args.cycles)
     distinct, counts, size = distinct_points(section.states, args.tol)
     if args.plot is not None:
         from chaospound.plot import plot_strobe
 
         fig = plot_strobe(section)
-        fig.suptitle(f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
-                     f"{section.model} model: section at phase {section.phase:g}, cycles "
+        what = (f"{scene.name}, {section.model} model" if system is not None else
+                f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
+                f"{section.model} model")
+        fig.suptitle(f"{what}: section at phase {section.phase:g}, cycles "
                      f"{int(section.cycles[0])}-{int(section.cycles[-1])}, {len(section)} "
                      f"points, {len(distinct)} distinct")
         _save_figure(fig, args.plot)
@@ -66,25 +85,36 @@ def _cmd_section(args: argparse.Namespace) -> int:
     document["transient_cycles"] = int(section.cycles[0])
     document["distinct_points"] = len(distinct)
     document["distinct_tol"] = args.tol
-    document["scene"] = scene.to_dict()
+    if system is not None:
+        document["system"] = _system_document(system)
+    else:
+        document["scene"] = scene.to_dict()
     if args.json:
         _emit(_json_text(document))
         return EXIT_OK
-    header = [
-        *_scene_rows(scene, f"{section.model} ({len(section.state_names)} states: "
-                            f"{' '.join(section.state_names)})", section.period),
+    rows_of_section = [
         ("section", f"t = ({section.phase:g} + k) T, k = {int(section.cycles[0])} .. "
                     f"{int(section.cycles[-1])}: {len(section)} points"),
-        ("solver", _solver_text(scene.solver)),
         ("distinct points", f"{len(distinct)} (within {args.tol:g} of the section's size "
                             f"{size:.4g})"),
     ]  # fmt: skip
+    if system is not None:
+        header = [*_system_header(system), *rows_of_section]
+    else:
+        header = [
+            *_scene_rows(scene, f"{section.model} ({len(section.state_names)} states: "
+                                f"{' '.join(section.state_names)})", section.period),
+            rows_of_section[0],
+            ("solver", _solver_text(scene.solver)),
+            rows_of_section[1],
+        ]  # fmt: skip
     names = section.state_names
+    units = [("" if system is not None else _state_unit(n)) for n in names]
     rows = [(str(i + 1), str(n), *(f"{v:.6g}" for v in section.states[j]))
             for i, (j, n) in enumerate(zip(distinct[:SECTION_ROWS], counts, strict=False))]
     blocks = [_table(None, header, "ll"),
-              _table(("#", "points", *names), [("", "", *(_state_unit(n) for n in names)),
-                                               *rows], "rr" + "r" * len(names))]
+              _table(("#", "points", *names), [("", "", *units), *rows],
+                     "rr" + "r" * len(names))]
     if len(distinct) > SECTION_ROWS:
         blocks.append(f"(first {SECTION_ROWS} of {len(distinct)} distinct points; all "
                       "points in --json)")
