@@ -34,9 +34,9 @@ if TYPE_CHECKING:
 def _orbit_warm(smap):
     """The call that loads the two engines of orbit work: the map and its monodromy."""
     def warm() -> None:
-        from chaospound.dynamics.system import advance, monodromy
+        from chaospound.dynamics.system import evolve, monodromy
 
-        advance(smap.system, smap.system.initial_state, 1)
+        evolve(smap.system, smap.system.initial_state, cycles=1)
         monodromy(smap.system, smap.system.initial_state, 1)
     return warm
 
