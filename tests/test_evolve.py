@@ -18,7 +18,7 @@ from test_custom import wall_gap, wall_jac, wall_rhs
 
 from chaospound import custom_system, load_preset
 from chaospound.dynamics.impact_map import impact_map
-from chaospound.dynamics.lyapunov import lyapunov_spectrum
+from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
 from chaospound.dynamics.poincare import stroboscopic_section
 from chaospound.dynamics.system import Evolution, System, evolve, monodromy
 from chaospound.engine import tables as kin
@@ -90,6 +90,16 @@ def test_tangent_runs_feed_the_spectrum_and_the_monodromy():
     state, matrix = monodromy(system, start, 1)
     np.testing.assert_array_equal(prop.tangent_log[0].reshape(12, 12).T, matrix)
     np.testing.assert_array_equal(prop.state, state)
+
+
+def test_the_two_trajectory_estimate_takes_an_initial_state():
+    """The drivers share ``initial_state``: a section state after the transient, given,
+    continues the run exactly as the transient inside the driver."""
+    system = System.from_scene(FIG3A)
+    inside = largest_exponent_two_trajectory(system, transient=4, cycles=6, n_blocks=2)
+    given = largest_exponent_two_trajectory(system, transient=0, cycles=6, n_blocks=2,
+                                            initial_state=evolve(system, cycles=4).state)
+    np.testing.assert_array_equal(given.history, inside.history)
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -206,6 +206,7 @@ def largest_exponent_two_trajectory(
     separation: float = 1e-7,
     n_blocks: int = 10,
     seed: int = 1,
+    initial_state: np.ndarray | None = None,
 ) -> LargestExponent:
     """Largest exponent from two nearby trajectories, renormalised every period.
 
@@ -213,7 +214,9 @@ def largest_exponent_two_trajectory(
     state, a fixed random direction from ``seed``); after every period the
     log of the growth of the separation is recorded and the separation is
     scaled back along its current direction. Use a tight tolerance: the
-    integration error must stay far below ``separation``.
+    integration error must stay far below ``separation``. ``initial_state``, a
+    state at a section, replaces the system's initial state at t = 0 (as in
+    :func:`lyapunov_spectrum`; the transient still runs).
     """
     system = as_system(system)
     _check_counts(cycles, n_blocks, 0)
@@ -221,9 +224,9 @@ def largest_exponent_two_trajectory(
     # each trajectory its own packed vector: a contact law's per-episode memory
     # (the onset velocity of hertzdamp) lives there
     system = replace(system, params=system.params.copy())
-    state = system.initial_state
+    state = system.initial_state if initial_state is None else np.asarray(initial_state, float)
     if transient > 0:
-        state = evolve(system, cycles=transient).state
+        state = evolve(system, initial_state, cycles=transient).state
     perturbed = replace(system, params=system.params.copy())
     rng = np.random.default_rng(seed)
     direction = rng.normal(size=state.shape[0])
