@@ -154,3 +154,48 @@ def store_propagator(y, n_base, n_vectors, out, row):
             if store:
                 out[row, i * n_base + c] = y[a + c]
             y[a + c] = 1.0 if c == i else 0.0
+
+
+@kernel
+def orthonormalize_memory(y, p, slot, n_base, n_vectors, log_out, row):
+    """:func:`orthonormalize`, carrying each vector's memory sensitivity along.
+
+    A law with per-episode memory keeps, in ``p[slot + i]``, the sensitivity of
+    its memory (d xi) to tangent vector i (docs/contact_laws.md section 7): a
+    hidden component of the vector, which Gram-Schmidt must combine exactly as
+    the vector's state components (``V_new = V R^-1``), but which takes no part
+    in the norms and projections (the exponents measure the state's growth).
+    """
+    store = 0 <= row < log_out.shape[0]
+    for i in range(n_vectors):
+        a = n_base * (i + 1)
+        for j in range(i):
+            b = n_base * (j + 1)
+            dot = 0.0
+            for c in range(n_base):
+                dot += y[a + c] * y[b + c]
+            for c in range(n_base):
+                y[a + c] -= dot * y[b + c]
+            p[slot + i] -= dot * p[slot + j]
+        norm = 0.0
+        for c in range(n_base):
+            norm += y[a + c] * y[a + c]
+        norm = np.sqrt(norm)
+        if store:
+            log_out[row, i] = np.log(norm)
+        for c in range(n_base):
+            y[a + c] /= norm
+        p[slot + i] /= norm
+
+
+@kernel
+def store_propagator_memory(y, p, slot, n_base, n_vectors, out, row):
+    """:func:`store_propagator`, resetting each vector's memory sensitivity to 0.
+
+    The propagator of one section interval is the derivative of the
+    stroboscopic map at fixed memory (the packed vector's, as a run started at
+    the section uses it): unit vectors with no memory sensitivity.
+    """
+    store_propagator(y, n_base, n_vectors, out, row)
+    for i in range(n_vectors):
+        p[slot + i] = 0.0

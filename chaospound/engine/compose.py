@@ -84,10 +84,16 @@ GROUNDS = {
 }
 #: the engine's own templates, after the model's
 TEMPLATES = ("chaospound.engine.glue", "chaospound.solvers.steppers",
-             "chaospound.engine.events", "chaospound.engine.loop")
+             "chaospound.engine.events", "chaospound.engine.memory", "chaospound.engine.loop")
 LAW_FUNCTIONS = ("point_force", "point_stiffness", "point_force_rate", "point_potential",
                  "line_force", "line_gradient", "line_force_rate", "line_potential", "on_onset")
-GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor", "next_kink")
+#: the memory kernels of a law with MEMORY (a law without: chaospound.physics.contact.memoryless)
+MEMORY_FUNCTIONS = ("onset_sensitivity", "point_memory_force", "line_memory_force")
+#: what a model defines to carry a law's memory in its tangent dynamics (a model
+#: without them: chaospound.physics.models.no_memory, and check_tangent refuses)
+MODEL_MEMORY_FUNCTIONS = ("model_memory_linearize", "model_memory_jvp", "model_onset_variation",
+                          "model_onset_accel")
+GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor", "next_kink", "acceleration")
 TANGENTS = ("none", "qr", "propagator")  #: what may ride along the state
 _PACKAGE = Path(__file__).resolve().parent.parent
 
@@ -237,11 +243,18 @@ def _bindings(c: Composition) -> str:
     lines.append(f"from {ground} import "
                  + ", ".join(f"{f} as ground_{f}" for f in GROUND_FUNCTIONS))
     law_module = importlib.import_module(law)
+    memory = law if law_module.MEMORY else "chaospound.physics.contact.memoryless"
+    lines.append(f"from {memory} import "
+                 + ", ".join(f"{f} as law_{f}" for f in MEMORY_FUNCTIONS))
+    if not model_carries_memory(c.model):
+        lines.append("from chaospound.physics.models.no_memory import "
+                     + ", ".join(MODEL_MEMORY_FUNCTIONS))
     lines += [
         f"LAW = {law_base(c.law)}",
         f"LAW_DISSIPATIVE = {bool(law_module.DISSIPATIVE)}",
         f"LAW_MEMORY = {bool(law_module.MEMORY)}",
         f"LAW_JUMPS = {bool(law_module.JUMPS)}",
+        f"LAW_DXI = {law_base(c.law) + getattr(law_module, 'TANGENT_SLOT', 0)}",
         f"GROUND = {ground_base(c)}",
         f"GROUND_PERIODIC = {c.ground in ('sine', 'none')}",
         f"GROUND_KINKS = {bool(importlib.import_module(ground).KINKS)}",
@@ -249,6 +262,9 @@ def _bindings(c: Composition) -> str:
         "from chaospound.engine.bookkeeping import "
         + ("store_propagator" if c.tangent == "propagator" else "orthonormalize")
         + " as section_tangent",
+        "from chaospound.engine.bookkeeping import "
+        + ("store_propagator_memory" if c.tangent == "propagator" else "orthonormalize_memory")
+        + " as section_tangent_memory",
         f"ADAPTIVE = {method.adaptive}",
         f"NEW_EVALS = {method.new_evals}",
         f"DENSE_EVALS = {method.dense_evals}",
@@ -306,13 +322,23 @@ def ground_base(c: Composition) -> int:
     return N_PARAMS + law_block_size(c.law)
 
 
-def check_tangent(c: Composition) -> None:
-    """Refuse tangent dynamics the engine cannot yet linearise exactly.
+def model_carries_memory(model: str) -> bool:
+    """Whether a model's template defines the kernels that carry a law's memory
+    (the onset velocity v0) in its tangent dynamics (:data:`MODEL_MEMORY_FUNCTIONS`)."""
+    module = importlib.import_module(MODELS[model])
+    return all(hasattr(module, name) for name in MODEL_MEMORY_FUNCTIONS)
 
-    A law with per-episode memory (its force depends on the onset velocity v0,
-    itself a function of the state at the onset) or with jumps needs a jump map
-    (saltation) in the variational equations at every onset; without it the
-    exponents and monodromy matrices would be silently wrong.
+
+def check_tangent(c: Composition) -> None:
+    """Refuse tangent dynamics the engine cannot linearise exactly.
+
+    Exact (docs/contact_laws.md section 7): a law with per-episode memory (the
+    onset velocity v0, a function of the state and time of the onset) on a
+    model that carries its sensitivity (the towers, tower-wall); a law whose
+    pointwise force jumps (Kelvin-Voigt) on a line contact, whose resultant is
+    continuous at a corner onset and release. Refused: memory on a model that
+    does not carry it (the point models), a jumping force on a point contact
+    (its saltation matrix is not implemented), and Jankowski's point contact.
     """
     if c.tangent == "none":
         return
@@ -324,14 +350,19 @@ def check_tangent(c: Composition) -> None:
                          "estimate (chaospound.dynamics.lyapunov."
                          "largest_exponent_two_trajectory), or a towers model, whose line "
                          "contact integrates the singularity")
-    if law.MEMORY or law.JUMPS:
-        why = ("its onset velocity v0 is per-episode memory" if law.MEMORY
-               else "its force jumps at onset")
-        raise ValueError(f"contact law {c.law!r}: Lyapunov exponents and monodromy matrices "
-                         f"are not available yet ({why}, which needs a saltation matrix at "
-                         "every onset); use the two-trajectory estimate "
-                         "(chaospound.dynamics.lyapunov.largest_exponent_two_trajectory) or "
-                         "an elastic or Jankowski law")
+    why = ""
+    if law.MEMORY and not model_carries_memory(c.model):
+        why = ("its onset velocity v0 is per-episode memory, whose sensitivity this model's "
+               "tangent dynamics do not carry")
+    elif law.JUMPS and c.model in POINT_MODELS:
+        why = ("its point force jumps at onset and release, which needs a saltation matrix "
+               "there")
+    if why:
+        raise ValueError(f"contact law {c.law!r} on the {c.model} model: Lyapunov exponents "
+                         f"and monodromy matrices are not available ({why}); use the "
+                         "two-trajectory estimate "
+                         "(chaospound.dynamics.lyapunov.largest_exponent_two_trajectory), "
+                         "or a towers or tower-wall model")
 
 
 def _footer(c: Composition) -> str:

@@ -10,10 +10,14 @@ call and applied to each vector).
 
 from chaospound.kernels.free import (
     GROUND,
+    LAW_DXI,
+    LAW_MEMORY,
     N_BASE,
     ground_at,
     model_jvp,
     model_linearize,
+    model_memory_jvp,
+    model_memory_linearize,
     model_rhs,
     rhs_grounded,
 )
@@ -43,9 +47,17 @@ def rhs_plain(t, y, p, ug, vg, out):
 
 @kernel
 def rhs_tangent(t, y, p, ug, vg, out):
-    """State and tangent vectors: ``y' = f(y)``, ``V' = J(y) V``."""
+    """State and tangent vectors: ``y' = f(y)``, ``V' = J(y) V``.
+
+    A law with memory adds ``(df/dxi) dxi_i`` to vector i, ``dxi_i`` its memory
+    sensitivity written at the episode's onset (:mod:`chaospound.engine.memory`).
+    """
     model_rhs(t, y, p, ug, vg, out)
     n = N_BASE
     lin = model_linearize(t, y, p)
     for i in range(1, y.shape[0] // n):
         model_jvp(p, lin, y[i * n:(i + 1) * n], out[i * n:(i + 1) * n])
+    if LAW_MEMORY:
+        mem = model_memory_linearize(t, y, p)
+        for i in range(1, y.shape[0] // n):
+            model_memory_jvp(p, mem, p[LAW_DXI + i - 1], out[i * n:(i + 1) * n])

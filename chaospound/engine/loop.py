@@ -64,6 +64,7 @@ from chaospound.kernels.free import (
     GROUND_KINKS,
     GROUND_PERIODIC,
     LAW,
+    LAW_DXI,
     LAW_MEMORY,
     N_BASE,
     N_ENDS,
@@ -82,8 +83,11 @@ from chaospound.kernels.free import (
     model_ends,
     model_force_rate,
     model_forces,
+    onset_tangent,
+    reset_tangent_memory,
     rhs,
     section_tangent,
+    section_tangent_memory,
     step,
 )
 from chaospound.kernels.jit import kernel
@@ -180,6 +184,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     h = clock[2]
     for i in range(N_STATS):
         stats[i] = 0
+    if LAW_MEMORY and n_vectors > 0:
+        reset_tangent_memory(p, n_vectors)  # the tangent starts at the packed memory
 
     rhs(t0 + tau, y, p, f0)
     stats[ST_RHS_EVALS] += 1
@@ -213,7 +219,11 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         if at_section:
             at_section = False
             if n_vectors > 0 and attempts > 0:
-                section_tangent(y, n_base, n_vectors, tangent_log, k - 1 - k_record)
+                if LAW_MEMORY:  # the vectors' memory sensitivities follow them
+                    section_tangent_memory(y, p, LAW_DXI, n_base, n_vectors, tangent_log,
+                                           k - 1 - k_record)
+                else:
+                    section_tangent(y, n_base, n_vectors, tangent_log, k - 1 - k_record)
                 rhs(t0, y, p, f0)
                 stats[ST_RHS_EVALS] += 1
             if k_record <= k <= k_end:
@@ -262,8 +272,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             continue
         if ADAPTIVE and err > 1.0:
             stats[ST_REJECTED] += 1
-            h = h_try * min(1.0, controller(err, err_prev))
             rejected_last = True
+            h = h_try * min(1.0, controller(err, err_prev))
             if h < 1e-14 * max(1.0, period):
                 status = STATUS_STEP_UNDERFLOW
                 break
@@ -390,8 +400,10 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             if now_active and not active and LAW_MEMORY:
                 # the law's per-episode memory (v0), at every onset, recorded or not
                 model_ends(t_ev, work, p, ends_tmp)
-                _, _, v_onset = model_contact_point(t_ev, work, p, ends_tmp)
+                _, y_onset, v_onset = model_contact_point(t_ev, work, p, ends_tmp)
                 law_on_onset(p, LAW, v_onset)
+                if n_vectors > 0:  # d xi of each tangent vector (engine/memory.py)
+                    onset_tangent(t_ev, work, p, y_onset, v_onset, n_base, n_vectors, work2)
             if now_active and not active:
                 # onset of an episode
                 if not record_done and k >= k_record and capacity > 0:

@@ -19,6 +19,7 @@ LAW = 0  #: first slot of the contact law's block
 LAW_DISSIPATIVE = False  #: the law's force depends on the penetration rate
 LAW_MEMORY = False  #: the law keeps per-episode memory (written at every onset)
 LAW_JUMPS = False  #: the law's force can jump at an onset or a release
+LAW_DXI = 0  #: slot of the first tangent vector's memory sensitivity d xi (laws with memory)
 GROUND = 0  #: first slot of the ground motion's block
 GROUND_PERIODIC = True  #: the motion is periodic with the section interval (the sine)
 GROUND_KINKS = False  #: the motion's acceleration has kinks at samples (a record)
@@ -37,15 +38,20 @@ USER_BASE = USER_END = USER_JAC = 0  #: a user system's parameters and Jacobian 
 law_point_force = law_point_stiffness = law_point_force_rate = law_point_potential = _unbound
 law_line_force = law_line_gradient = law_line_force_rate = law_line_potential = _unbound
 law_on_onset = _unbound
+law_onset_sensitivity = law_point_memory_force = law_line_memory_force = _unbound
 # ---- ground motion
 ground_at = ground_anchor = ground_shifted = ground_at_anchor = ground_next_kink = _unbound
+ground_acceleration = _unbound
 # ---- model
 model_rhs = model_ends = model_rate = model_forces = model_force_rate = _unbound
 model_potential = model_energy = model_trace = model_linearize = model_jvp = _unbound
 model_contact_point = _unbound
+model_memory_linearize = model_memory_jvp = model_onset_variation = model_onset_accel = _unbound
 # ---- user system
 user_rhs = user_jacobian = user_gap = _unbound
 # ---- method
 step = dense_prepare = controller = step_error = section_tangent = _unbound
+section_tangent_memory = _unbound
 # ---- defined by the engine templates, used by others
 rhs = rhs_grounded = end_value = locate_root = locate_extremum = _unbound
+onset_tangent = reset_tangent_memory = _unbound

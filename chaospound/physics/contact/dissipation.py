@@ -26,6 +26,9 @@ from chaospound.physics.contact.moments import EPS_SERIES, SERIES_MAX_TERMS, SER
 from chaospound.physics.powers import power
 
 V0_FLOOR = 1e-6  #: default floor of the onset velocity v0 (units of A_g omega_Ax)
+#: tangent vectors whose memory sensitivity a law with memory keeps (its block's slots):
+#: the largest state dimension of a model that carries them (towers, 12)
+MAX_TANGENT_VECTORS = 12
 
 
 # ------------------------------------------------------------------ moments

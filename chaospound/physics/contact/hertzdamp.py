@@ -44,7 +44,12 @@ rate term needs the third moment :func:`.dissipation.moment3`.
 from __future__ import annotations
 
 from chaospound.kernels.jit import inline, kernel
-from chaospound.physics.contact.dissipation import V0_FLOOR, check_restitution, moment3
+from chaospound.physics.contact.dissipation import (
+    MAX_TANGENT_VECTORS,
+    V0_FLOOR,
+    check_restitution,
+    moment3,
+)
 from chaospound.physics.contact.hertz import (  # noqa: F401  (the elastic part's potential)
     line_potential,
     point_potential,
@@ -54,7 +59,9 @@ from chaospound.physics.powers import power
 
 NAME = "hertzdamp"
 PARAMETERS = ("beta", "chi", "zeta", "v0_floor")  #: the law's block, in order
-MEMORY = ("v0", "xi")  #: per-episode memory after PARAMETERS: onset velocity, xi = zeta / v0
+#: per-episode memory after PARAMETERS: onset velocity, xi = zeta / v0, then the tangent
+#: dynamics' sensitivities d xi of each tangent vector (written at onset, docs/contact_laws.md 7)
+MEMORY = ("v0", "xi") + tuple(f"dxi_{i}" for i in range(MAX_TANGENT_VECTORS))
 CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part's
 DISSIPATIVE = True  #: the force depends on the penetration rate
 JUMPS = False  #: the force is continuous across onset and release
@@ -62,6 +69,7 @@ SWITCHES = 0  #: no extra event surface while in contact
 VARIANTS = ("lankarani-nikravesh", "ye")  #: the zeta(e) formulas of :func:`block`
 _V0 = 4  #: offset of the memory slot v0 in the block
 _XI = 5  #: offset of the memory slot xi
+TANGENT_SLOT = 6  #: offset of the first tangent sensitivity d xi (one slot per tangent vector)
 
 
 def damping_numerator(e: float, beta: float, variant: str = "lankarani-nikravesh") -> float:
@@ -118,8 +126,10 @@ def _block(zeta: float, beta: float, chi: float, v0_floor: float,
     if not v0_floor > 0.0:
         raise ValueError(f"v0_floor = {v0_floor}: need > 0")
     v0 = max(float(v0_initial), v0_floor)
-    return {"beta": float(beta), "chi": float(chi), "zeta": float(zeta),
-            "v0_floor": float(v0_floor), "v0": v0, "xi": zeta / v0}
+    values = {"beta": float(beta), "chi": float(chi), "zeta": float(zeta),
+              "v0_floor": float(v0_floor), "v0": v0, "xi": zeta / v0}
+    values.update({name: 0.0 for name in MEMORY[2:]})
+    return values
 
 
 @kernel
@@ -132,6 +142,43 @@ def on_onset(p, base, rate):
     v0 = max(rate, p[base + 3])
     p[base + _V0] = v0
     p[base + _XI] = p[base + 2] / v0
+
+
+@kernel
+def onset_sensitivity(p, base, rate):
+    """``d xi / d rate`` of :func:`on_onset` at the onset's closing velocity ``rate``.
+
+    ``-zeta / rate^2`` above the floor, 0 below it (v0 is then the constant
+    floor). Units of ``K_Ax A_g^(1 - chi) / (A_g omega_Ax)^2``.
+    """
+    if rate > p[base + 3]:
+        return -p[base + 2] / (rate * rate)
+    return 0.0
+
+
+@inline
+def point_memory_force(p, base, d, rate):
+    """``dF/d xi = d^chi d'`` of :func:`point_force` (0 when d <= 0)."""
+    if d <= 0.0:
+        return 0.0
+    return power(d, p[base + 1]) * rate
+
+
+@inline
+def line_memory_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
+    """``(dF/d xi, dM/d xi)`` of :func:`line_force` (the force is affine in xi).
+
+    Units: the force's and the moment's divided by xi's.
+    """
+    chi = p[base + 1]
+    d_lo = d_c - slope * half_length
+    d_hi = d_c + slope * half_length
+    if d_lo <= 0.0 and d_hi <= 0.0:
+        return 0.0, 0.0
+    m0, m1, m2 = moments(chi, d_lo, d_hi)
+    length = 2.0 * half_length
+    dr = rate_slope * length
+    return rate_c * m0 + dr * m1, length * (rate_c * m1 + dr * m2)
 
 
 @inline

@@ -9,10 +9,12 @@ from chaospound.kernels.free import (
     GROUND,
     LAW,
     LAW_DISSIPATIVE,
+    ground_acceleration,
     ground_at,
     law_line_force,
     law_line_force_rate,
     law_line_gradient,
+    law_line_memory_force,
     law_line_potential,
 )
 from chaospound.kernels.jit import inline, kernel
@@ -195,3 +197,51 @@ def model_contact_point(t, state, p, ends):
         y_at = y_c - half
         corner = CORNER_A_MINUS
     return corner, y_at, model_rate(t, state, p, y_at)
+
+
+# ---- a law's per-episode memory in the tangent dynamics (docs/contact_laws.md 7)
+
+
+@kernel
+def model_memory_linearize(t, y, p):
+    """``(F_xi, M_xi, th_A, arm_A)``: the contact resultants' derivatives with respect
+    to the law's memory xi, and the geometry that maps them."""
+    th_a = y[4]
+    y_c = p[P_Y_C]
+    arm_a = y[2] + p[TOWER_A + T_EY] - y_c
+    ug, _ = ground_at(t, p, GROUND)
+    d_c = y[0] - ug - p[P_GAP] + th_a * arm_a
+    rate_c, rate_slope = _rates(t, y, p)
+    f_xi, m_xi = law_line_memory_force(p, LAW, d_c, -th_a, rate_c, rate_slope, p[P_HALF_L])
+    return f_xi, m_xi, th_a, arm_a
+
+
+@kernel
+def model_memory_jvp(p, mem, dxi, out):
+    """``out += (df/dxi) dxi`` with the coefficients of :func:`model_memory_linearize`."""
+    f_xi, m_xi, th_a, arm_a = mem
+    if dxi == 0.0 or (f_xi == 0.0 and m_xi == 0.0):
+        return
+    d_force = f_xi * dxi
+    mu_a = p[TOWER_A + T_MU]
+    out[1] -= mu_a * d_force
+    out[3] -= mu_a * th_a * d_force
+    out[5] += p[TOWER_A + T_MU_RHO2] * (m_xi * dxi - arm_a * d_force)
+
+
+@kernel
+def model_onset_variation(t, y, p, v, y_at):
+    """``(dd, dV)``: variations of the penetration and of the closing velocity
+    (:func:`model_rate`) at height ``y_at`` along the state variation ``v``, at fixed t."""
+    lever = y_at - (y[2] + p[TOWER_A + T_EY])
+    dd = v[0] - v[4] * lever + y[4] * v[2]
+    dv = v[1] - v[5] * lever + y[5] * v[2] + v[4] * y[3] + y[4] * v[3]
+    return dd, dv
+
+
+@kernel
+def model_onset_accel(t, y, p, f, y_at):
+    """Closing acceleration ``dV/dt`` at ``y_at`` along the flow ``f``, the wall's
+    acceleration included (V holds ``-u_g'(t)``)."""
+    _, dv = model_onset_variation(t, y, p, f, y_at)
+    return dv - ground_acceleration(t, p, GROUND)

@@ -32,6 +32,7 @@ from chaospound.kernels.free import (
     law_line_force,
     law_line_force_rate,
     law_line_gradient,
+    law_line_memory_force,
     law_line_potential,
 )
 from chaospound.kernels.jit import inline, kernel
@@ -280,3 +281,60 @@ def model_contact_point(t, state, p, ends):
         y_at = y_c - half
         corner = _corner_label(p, state, False)
     return corner, y_at, model_rate(t, state, p, y_at)
+
+
+# ---- a law's per-episode memory in the tangent dynamics (docs/contact_laws.md 7)
+
+
+@kernel
+def model_memory_linearize(t, y, p):
+    """``(F_xi, M_xi, th_A, th_B, arm_A, arm_B)``: the contact resultants' derivatives
+    with respect to the law's memory xi, and the geometry that maps them."""
+    th_a = y[4]
+    th_b = y[10]
+    y_c = p[P_Y_C]
+    arm_a = y[2] + p[TOWER_A + T_EY] - y_c
+    arm_b = y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY] - y_c
+    d_c = y[0] - y[6] - p[P_GAP] + th_a * arm_a - th_b * arm_b
+    rate_c, rate_slope = _rates(t, y, p)
+    f_xi, m_xi = law_line_memory_force(p, LAW, d_c, th_b - th_a, rate_c, rate_slope,
+                                       p[P_HALF_L])
+    return f_xi, m_xi, th_a, th_b, arm_a, arm_b
+
+
+@kernel
+def model_memory_jvp(p, mem, dxi, out):
+    """``out += (df/dxi) dxi`` with the coefficients of :func:`model_memory_linearize`."""
+    f_xi, m_xi, th_a, th_b, arm_a, arm_b = mem
+    if dxi == 0.0 or (f_xi == 0.0 and m_xi == 0.0):
+        return
+    d_force = f_xi * dxi
+    d_moment = m_xi * dxi
+    mu_a = p[TOWER_A + T_MU]
+    mu_b = p[TOWER_B + T_MU]
+    out[1] -= mu_a * d_force
+    out[3] -= mu_a * th_a * d_force
+    out[5] += p[TOWER_A + T_MU_RHO2] * (d_moment - arm_a * d_force)
+    out[7] += mu_b * d_force
+    out[9] += mu_b * th_b * d_force
+    out[11] += p[TOWER_B + T_MU_RHO2] * (-d_moment + arm_b * d_force)
+
+
+@kernel
+def model_onset_variation(t, y, p, v, y_at):
+    """``(dd, dV)``: variations of the penetration and of the closing velocity
+    (:func:`model_rate`) at height ``y_at`` along the state variation ``v``, at fixed t."""
+    lever_a = y_at - (y[2] + p[TOWER_A + T_EY])
+    lever_b = y_at - (y[8] + p[P_Y_OFF] + p[TOWER_B + T_EY])
+    dd = v[0] - v[6] - v[4] * lever_a + y[4] * v[2] + v[10] * lever_b - y[10] * v[8]
+    dv = (v[1] - v[7] - v[5] * lever_a + y[5] * v[2] + v[11] * lever_b - y[11] * v[8]
+          + v[4] * y[3] + y[4] * v[3] - v[10] * y[9] - y[10] * v[9])
+    return dd, dv
+
+
+@kernel
+def model_onset_accel(t, y, p, f, y_at):
+    """Closing acceleration ``dV/dt`` at ``y_at`` along the flow ``f`` (V has no
+    explicit time dependence: the towers' relative motion)."""
+    _, dv = model_onset_variation(t, y, p, f, y_at)
+    return dv

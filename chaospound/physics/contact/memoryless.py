@@ -1,0 +1,30 @@
+"""The memory kernels of a law without per-episode memory (bound by every such composition).
+
+A composition binds ``law_onset_sensitivity``, ``law_point_memory_force`` and
+``law_line_memory_force`` from the law's module when the law has ``MEMORY``
+(:mod:`.hertzdamp`, :mod:`.hunt_crossley`), else from here: the engine calls
+them only when ``LAW_MEMORY`` is on, so these are never reached; they exist so
+that every composition's text resolves the same names (docs/contact_laws.md 7).
+"""
+
+from chaospound.kernels.jit import inline, kernel
+
+TANGENT_SLOT = 0  #: no tangent sensitivities in the block
+
+
+@kernel
+def onset_sensitivity(p, base, rate):
+    """0: no memory written at onset."""
+    return 0.0
+
+
+@inline
+def point_memory_force(p, base, d, rate):
+    """0: the force does not depend on a memory."""
+    return 0.0
+
+
+@inline
+def line_memory_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
+    """``(0, 0)``: the force does not depend on a memory."""
+    return 0.0, 0.0
