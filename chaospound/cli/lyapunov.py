@@ -65,7 +65,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 
 
 def _cmd_lyapunov(args: argparse.Namespace) -> int:
-    from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
+    from chaospound.dynamics.lyapunov import lyapunov_spectrum
     from chaospound.dynamics.system import System
 
     scene = target_from_args(args)
@@ -82,6 +82,11 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
         )
     if args.plot is not None:
         check_figure_path(args.plot)
+    refusal = _qr_refusal(system)
+    if refusal is not None:
+        if not args.two_trajectory:
+            raise CliError(f"{refusal}; run lyapunov --two-trajectory for the largest exponent")
+        return _lyapunov_two_trajectory_only(args, scene, system, refusal)
     # warm the jitted kernels up, so that the reported wall time is the work's
     _load_kernels(args.quiet, lambda: lyapunov_spectrum(
         system, k=args.k, transient=0, tangent_transient=0, cycles=2, n_blocks=2),
@@ -106,20 +111,7 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
             floquet = spectrum_floquet(system, spectrum)
     two, two_system, two_wall = None, None, 0.0
     if args.two_trajectory:
-        two_system = system
-        if system.method != "rk4":
-            two_system = system.with_solver(
-                rtol=min(system.rtol, LYAPUNOV_TWO_RTOL), atol=min(system.atol, LYAPUNOV_TWO_ATOL)
-            )
-        start = time.perf_counter()
-        with _Status(f"two trajectories: {args.cycles} cycles", quiet=args.quiet):
-            two = largest_exponent_two_trajectory(
-                two_system,
-                cycles=args.cycles,
-                separation=LYAPUNOV_SEPARATION,
-                n_blocks=LYAPUNOV_BLOCKS,
-            )
-        two_wall = time.perf_counter() - start
+        two, two_system, two_wall = _two_trajectory_run(args, system)
     if args.plot is not None:
         title = (f"{system.name}, T = {system.period:.4g}, custom model" if system is scene
                  else f"{scene.name}, $T/T_{{Ax}}$ = {scene.excitation.period_ratio:g}, "
@@ -132,6 +124,87 @@ def _cmd_lyapunov(args: argparse.Namespace) -> int:
         _emit(_json_text(document))
     else:
         _emit(_lyapunov_report(scene, system, spectrum, document, args.plot))
+    return EXIT_OK
+
+
+def _qr_refusal(system) -> str | None:
+    """Why the engine refuses QR tangent dynamics for this system (its contact law on
+    its model: docs/contact_laws.md section 7), or None."""
+    from chaospound.engine.compose import check_tangent
+
+    try:
+        check_tangent(system.composition.with_tangent("qr"))
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
+def _two_trajectory_run(args: argparse.Namespace, system):
+    """``(result, system run, wall seconds)`` of the two-trajectory estimate."""
+    from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory
+
+    two_system = system
+    if system.method != "rk4":
+        two_system = system.with_solver(
+            rtol=min(system.rtol, LYAPUNOV_TWO_RTOL), atol=min(system.atol, LYAPUNOV_TWO_ATOL)
+        )
+    start = time.perf_counter()
+    with _Status(f"two trajectories: {args.cycles} cycles", quiet=args.quiet):
+        two = largest_exponent_two_trajectory(
+            two_system,
+            cycles=args.cycles,
+            separation=LYAPUNOV_SEPARATION,
+            n_blocks=LYAPUNOV_BLOCKS,
+        )
+    return two, two_system, time.perf_counter() - start
+
+
+def _lyapunov_two_trajectory_only(args: argparse.Namespace, scene, system, refusal: str) -> int:
+    """``lyapunov --two-trajectory`` where the tangent dynamics are refused: the largest
+    exponent from two trajectories alone, the refusal stated."""
+    if args.plot is not None:
+        raise CliError("--plot draws the QR convergence, which is not available here "
+                       f"({refusal})")
+    two, two_system, two_wall = _two_trajectory_run(args, system)
+    document = {
+        "model": system.model_name,
+        "state_dim": system.dim,
+        "qr": {"available": False, "reason": refusal},
+        "two_trajectory": {
+            "exponent": two.exponent,
+            "error": two.error,
+            "per_cycle": two.per_cycle,
+            "error_per_cycle": two.error * two.period,
+            "separation": two.separation,
+            "cycles": two.cycles,
+            "rtol": two_system.rtol,
+            "atol": two_system.atol,
+            "wall_s": two_wall,
+        },
+    }
+    if system is scene:
+        document["system"] = _system_document(system)
+    else:
+        document["scene"] = scene.to_dict()
+    _with_units(document)
+    if args.json:
+        _emit(_json_text(document))
+        return EXIT_OK
+    if system is scene:
+        header = _system_header(system)
+    else:
+        header = [*_scene_rows(scene, f"{system.model_name} ({system.dim} states)",
+                               system.period),
+                  ("solver", _solver_text(scene.solver))]
+    summary = [
+        ("QR spectrum", f"not available: {refusal}"),
+        ("two trajectories",
+         f"lambda_1 = {two.exponent:+.6f} +- {two.error:.2g} per unit t, "
+         f"{two.per_cycle:+.6f} +- {two.error * two.period:.2g} per cycle "
+         f"({two.cycles} cycles, separation {two.separation:g}, rtol {two_system.rtol:g}, "
+         f"{two_wall:.3g} s)"),
+    ]
+    _emit("\n\n".join([_table(None, header, "ll"), _table(None, summary, "ll")]) + "\n")
     return EXIT_OK
 
 

@@ -246,6 +246,8 @@ def _bindings(c: Composition) -> str:
     memory = law if law_module.MEMORY else "chaospound.physics.contact.memoryless"
     lines.append(f"from {memory} import "
                  + ", ".join(f"{f} as law_{f}" for f in MEMORY_FUNCTIONS))
+    jumps = law if law_module.JUMPS else "chaospound.physics.contact.memoryless"
+    lines.append(f"from {jumps} import on_sides as law_on_sides")
     if not model_carries_memory(c.model):
         lines.append("from chaospound.physics.models.no_memory import "
                      + ", ".join(MODEL_MEMORY_FUNCTIONS))

@@ -65,6 +65,7 @@ from chaospound.kernels.free import (
     GROUND_PERIODIC,
     LAW,
     LAW_DXI,
+    LAW_JUMPS,
     LAW_MEMORY,
     N_BASE,
     N_ENDS,
@@ -77,6 +78,7 @@ from chaospound.kernels.free import (
     ground_next_kink,
     initial_step,
     law_on_onset,
+    law_on_sides,
     locate_extremum,
     locate_root,
     model_contact_point,
@@ -202,6 +204,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     inside_lo = ends_old[0] > 0.0
     inside_hi = ends_old[1] > 0.0 if two_ends else inside_lo
     active = inside_lo or inside_hi
+    if LAW_JUMPS:  # the law's Jacobian follows the event flags (docs/contact_laws.md 7)
+        law_on_sides(p, LAW, inside_lo, inside_hi)
     episode = -1  # row of the impact whose episode is running, -1 if none recorded
     n_imp = 0
     n_traj = 0
@@ -396,6 +400,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                     inside_hi = inside_lo
             else:
                 inside_hi = not inside_hi
+            if LAW_JUMPS:
+                law_on_sides(p, LAW, inside_lo, inside_hi)
             now_active = inside_lo or inside_hi
             if now_active and not active and LAW_MEMORY:
                 # the law's per-episode memory (v0), at every onset, recorded or not

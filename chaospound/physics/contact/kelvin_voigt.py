@@ -54,7 +54,9 @@ from chaospound.physics.contact.linear import (  # noqa: F401  (elastic potentia
 from chaospound.physics.contact.moments import force_moments, moments
 
 NAME = "kelvin-voigt"
-PARAMETERS = ("k", "c", "no_pull")  #: the law's block, in order
+#: the law's block, in order; ``side_lo, side_hi`` are the engine's contact flags of
+#: the line's ends (-1 until an engine writes them: :func:`on_sides`)
+PARAMETERS = ("k", "c", "no_pull", "side_lo", "side_hi")
 MEMORY = ()  #: no per-episode memory
 CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part's
 DISSIPATIVE = True  #: the force depends on the penetration rate
@@ -91,7 +93,25 @@ def block(e: float, *, k: float, m_eff: float, no_pull: bool = False) -> dict[st
     if not k > 0.0 or not m_eff > 0.0:
         raise ValueError(f"k = {k}, m_eff = {m_eff}: need both > 0")
     c = 2.0 * damping_ratio(e) * math.sqrt(k * m_eff)
-    return {"k": float(k), "c": float(c), "no_pull": 1.0 if no_pull else 0.0}
+    return {"k": float(k), "c": float(c), "no_pull": 1.0 if no_pull else 0.0,
+            "side_lo": -1.0, "side_hi": -1.0}
+
+
+@kernel
+def on_sides(p, base, inside_lo, inside_hi):
+    """Record which ends of the line the engine counts in contact (its event flags).
+
+    The line resultant is continuous where an end crosses d = 0, but its
+    Jacobian jumps there (the edge term of :func:`line_gradient` appears or
+    vanishes). The engine lands a step on every crossing and flips its flag
+    after the step, so a Jacobian that follows the flags is the one-sided
+    limit on each side of the crossing at every stage of both steps, which the
+    variational equations need (docs/contact_laws.md section 7); one that
+    followed the sign of d would switch at a stage a rounding error from the
+    crossing. Slots ``-1`` (a block no engine has run): the sign of d decides.
+    """
+    p[base + 3] = 1.0 if inside_lo else 0.0
+    p[base + 4] = 1.0 if inside_hi else 0.0
 
 
 @inline
@@ -133,6 +153,15 @@ def _penetrated(d_lo, d_hi):
     if d_hi > 0.0:
         return s_d, 1.0, s_d
     return 0.0, s_d, s_d
+
+
+@inline
+def _flagged_edge(inside_lo, inside_hi, d_lo, d_hi):
+    """The contact edge's position in [0, 1] when exactly one end is flagged in
+    contact (where d = 0, clamped to the line), else -1.0 (:func:`on_sides`)."""
+    if inside_lo == inside_hi or d_lo == d_hi:
+        return -1.0
+    return min(max(d_lo / (d_lo - d_hi), 0.0), 1.0)
 
 
 @inline
@@ -234,6 +263,8 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
     else:
         n0, n1, n2 = moments(0.0, d_lo, d_hi)
         _, _, edge = _penetrated(d_lo, d_hi)
+    if p[base + 3] >= 0.0:  # the engine's flags decide whether an edge is inside the line
+        edge = _flagged_edge(p[base + 3] > 0.0, p[base + 4] > 0.0, d_lo, d_hi)
     bound = 0.0
     arm = 0.0
     if edge >= 0.0:

@@ -1,10 +1,12 @@
-"""The memory kernels of a law without per-episode memory (bound by every such composition).
+"""The memory and jump kernels of a law without memory or jumps (bound by such compositions).
 
 A composition binds ``law_onset_sensitivity``, ``law_point_memory_force`` and
 ``law_line_memory_force`` from the law's module when the law has ``MEMORY``
-(:mod:`.hertzdamp`, :mod:`.hunt_crossley`), else from here: the engine calls
-them only when ``LAW_MEMORY`` is on, so these are never reached; they exist so
-that every composition's text resolves the same names (docs/contact_laws.md 7).
+(:mod:`.hertzdamp`, :mod:`.hunt_crossley`), and ``law_on_sides`` when it
+``JUMPS`` (:mod:`.kelvin_voigt`), else from here: the engine calls them only
+when ``LAW_MEMORY`` (``LAW_JUMPS``) is on, so these are never reached; they
+exist so that every composition's text resolves the same names
+(docs/contact_laws.md section 7).
 """
 
 from chaospound.kernels.jit import inline, kernel
@@ -28,3 +30,9 @@ def point_memory_force(p, base, d, rate):
 def line_memory_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
     """``(0, 0)``: the force does not depend on a memory."""
     return 0.0, 0.0
+
+
+@kernel
+def on_sides(p, base, inside_lo, inside_hi):
+    """Nothing to record: the law's Jacobian does not jump where an end crosses."""
+    return
