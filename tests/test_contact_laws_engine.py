@@ -110,8 +110,11 @@ def test_dissipation_lowers_the_rebound():
     assert rebound[0] > rebound[1] > rebound[2]
 
 
-@pytest.mark.parametrize("law", ["hertzdamp", "hunt-crossley", "kelvin-voigt", "jankowski"])
+@pytest.mark.parametrize("law", ["kelvin-voigt", "jankowski"])
 def test_tangent_dynamics_are_refused_where_they_would_be_wrong(law):
+    """Kelvin-Voigt's point force jumps (its saltation matrix is not implemented) and
+    Jankowski's point Jacobian is singular at onset (the laws with memory are exact
+    there now: tests/test_contact_tangent.py)."""
     system = System.from_scene(load_preset("wall").with_params(contact_law=law))
     with pytest.raises(ValueError, match="not available"):
         system.engine("qr")

@@ -69,11 +69,15 @@ def _check_monodromy(system: System, cycles: int = 30) -> None:
     assert np.max(np.abs(matrix - reference)) < 1e-6 * np.max(np.abs(reference))
 
 
-@pytest.mark.parametrize("law", ["hertzdamp", "kelvin-voigt"])
-def test_monodromy_across_memory_and_jumps_is_the_strobe_maps_derivative(law):
-    """tower-wall: hertzdamp's v0 sensitivity (through the onset state and time) and
-    Kelvin-Voigt's edge jump (a continuous resultant) are exact in the tangent."""
-    _check_monodromy(_system("tower-wall", law))
+@pytest.mark.parametrize("preset,law", [("tower-wall", "hertzdamp"),
+                                        ("tower-wall", "kelvin-voigt"),
+                                        ("wall", "hertzdamp"),
+                                        ("fig4-translational", "hunt-crossley")])
+def test_monodromy_across_memory_and_jumps_is_the_strobe_maps_derivative(preset, law):
+    """hertzdamp's v0 sensitivity (through the onset state and time) on a line and a
+    point contact, and Kelvin-Voigt's line contact (a continuous resultant whose
+    Jacobian jumps at the crossings) are exact in the tangent."""
+    _check_monodromy(_system(preset, law))
 
 
 @pytest.mark.slow
@@ -223,21 +227,21 @@ SHORT = ["--transient", "5", "--record", "2", "--cycles", "10"]
 
 
 def test_cli_lyapunov_where_the_tangent_is_refused(capsys):
-    """A law with memory on the point-contact wall: QR is refused in one line that
-    names the way out, and --two-trajectory alone runs."""
+    """Kelvin-Voigt on the point-contact wall (its force jumps at onset): QR is refused
+    in one line that names the way out, and --two-trajectory alone runs."""
     from chaospound.cli import main
 
-    argv = ["lyapunov", "--preset", "wall", "--set", "contact_law=hertzdamp", *SHORT]
+    argv = ["lyapunov", "--preset", "wall", "--set", "contact_law=kelvin-voigt", *SHORT]
     code = main(argv)
     out, err = capsys.readouterr()
     assert code == 2 and out == ""
     assert len(err.splitlines()) == 1 and "Traceback" not in err
-    assert "hertzdamp" in err and "--two-trajectory" in err
+    assert "kelvin-voigt" in err and "--two-trajectory" in err
     code = main([*argv, "--two-trajectory", "--json"])
     out, err = capsys.readouterr()
     assert code == 0, err
     document = json.loads(out)
-    assert document["qr"]["available"] is False and "hertzdamp" in document["qr"]["reason"]
+    assert document["qr"]["available"] is False and "kelvin-voigt" in document["qr"]["reason"]
     assert math.isfinite(document["two_trajectory"]["exponent"])
     code = main([*argv, "--two-trajectory"])
     out, err = capsys.readouterr()

@@ -336,11 +336,11 @@ def check_tangent(c: Composition) -> None:
 
     Exact (docs/contact_laws.md section 7): a law with per-episode memory (the
     onset velocity v0, a function of the state and time of the onset) on a
-    model that carries its sensitivity (the towers, tower-wall); a law whose
-    pointwise force jumps (Kelvin-Voigt) on a line contact, whose resultant is
-    continuous at a corner onset and release. Refused: memory on a model that
-    does not carry it (the point models), a jumping force on a point contact
-    (its saltation matrix is not implemented), and Jankowski's point contact.
+    model that carries its sensitivity (towers, tower-wall, wall, pair); a law
+    whose pointwise force jumps (Kelvin-Voigt) on a line contact, whose
+    resultant is continuous at a corner onset and release. Refused: memory on
+    a model that does not carry it, a jumping force on a point contact (its
+    saltation matrix is not implemented), and Jankowski's point contact.
     """
     if c.tangent == "none":
         return

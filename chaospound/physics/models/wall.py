@@ -8,9 +8,11 @@ from chaospound.kernels.free import (
     GROUND,
     LAW,
     LAW_DISSIPATIVE,
+    ground_acceleration,
     ground_at,
     law_point_force,
     law_point_force_rate,
+    law_point_memory_force,
     law_point_potential,
     law_point_stiffness,
 )
@@ -116,3 +118,31 @@ def model_jvp(p, lin, v, out):
 def model_contact_point(t, state, p, ends):
     """``(face, 0, closing velocity)``: a point contact has no corners."""
     return CORNER_FACE, 0.0, ends[2]
+
+
+# ---- a law's per-episode memory in the tangent dynamics (docs/contact_laws.md 7)
+
+
+@kernel
+def model_memory_linearize(t, y, p):
+    """``(dF/dxi,)``: the contact force's derivative with respect to the law's memory."""
+    ug, vg = ground_at(t, p, GROUND)
+    return (law_point_memory_force(p, LAW, y[0] - ug - p[P_GAP], y[1] - vg),)
+
+
+@kernel
+def model_memory_jvp(p, mem, dxi, out):
+    """``out += (df/dxi) dxi``."""
+    out[1] -= p[TOWER_A + T_MU] * mem[0] * dxi
+
+
+@kernel
+def model_onset_variation(t, y, p, v, y_at):
+    """``(dd, dV)`` of the penetration and the closing velocity along ``v`` (fixed t)."""
+    return v[0], v[1]
+
+
+@kernel
+def model_onset_accel(t, y, p, f, y_at):
+    """Closing acceleration ``X_A'' - u_g''`` along the flow ``f``."""
+    return f[1] - ground_acceleration(t, p, GROUND)
