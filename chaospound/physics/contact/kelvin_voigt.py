@@ -54,9 +54,14 @@ from chaospound.physics.contact.linear import (  # noqa: F401  (elastic potentia
 from chaospound.physics.contact.moments import force_moments, moments
 
 NAME = "kelvin-voigt"
-#: the law's block, in order; ``side_lo, side_hi`` are the engine's contact flags of
-#: the line's ends (-1 until an engine writes them: :func:`on_sides`)
-PARAMETERS = ("k", "c", "no_pull", "side_lo", "side_hi")
+#: the law's block, in order; the slot ``no_pull`` holds mode bits: bit 0 is the
+#: no-pull flag (0 or 1 from :func:`block`), bits 1-3 the engine's contact flags of the
+#: line's ends (:func:`on_sides`; 0 until an engine writes them)
+PARAMETERS = ("k", "c", "no_pull")
+NO_PULL = 1  #: bit of the ``no_pull`` slot: clip the force at 0
+SIDES_KNOWN = 2  #: bit: the engine wrote its contact flags (the next two bits)
+SIDE_LO = 4  #: bit: the engine counts the y_lo end in contact
+SIDE_HI = 8  #: bit: the engine counts the y_hi end in contact
 MEMORY = ()  #: no per-episode memory
 CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part's
 DISSIPATIVE = True  #: the force depends on the penetration rate
@@ -93,8 +98,7 @@ def block(e: float, *, k: float, m_eff: float, no_pull: bool = False) -> dict[st
     if not k > 0.0 or not m_eff > 0.0:
         raise ValueError(f"k = {k}, m_eff = {m_eff}: need both > 0")
     c = 2.0 * damping_ratio(e) * math.sqrt(k * m_eff)
-    return {"k": float(k), "c": float(c), "no_pull": 1.0 if no_pull else 0.0,
-            "side_lo": -1.0, "side_hi": -1.0}
+    return {"k": float(k), "c": float(c), "no_pull": 1.0 if no_pull else 0.0}
 
 
 @kernel
@@ -108,10 +112,21 @@ def on_sides(p, base, inside_lo, inside_hi):
     limit on each side of the crossing at every stage of both steps, which the
     variational equations need (docs/contact_laws.md section 7); one that
     followed the sign of d would switch at a stage a rounding error from the
-    crossing. Slots ``-1`` (a block no engine has run): the sign of d decides.
+    crossing. The flags are bits of the ``no_pull`` slot (its bit 0 kept); a block
+    no engine has run has none, and the sign of d decides.
     """
-    p[base + 3] = 1.0 if inside_lo else 0.0
-    p[base + 4] = 1.0 if inside_hi else 0.0
+    bits = (int(p[base + 2]) & NO_PULL) | SIDES_KNOWN
+    if inside_lo:
+        bits |= SIDE_LO
+    if inside_hi:
+        bits |= SIDE_HI
+    p[base + 2] = float(bits)
+
+
+@inline
+def _no_pull(p, base):
+    """The ``no_pull`` flag (bit 0 of its slot)."""
+    return (int(p[base + 2]) & NO_PULL) != 0
 
 
 @inline
@@ -120,7 +135,7 @@ def point_force(p, base, d, rate):
     if d <= 0.0:
         return 0.0
     f = p[base] * d + p[base + 1] * rate
-    if p[base + 2] != 0.0 and f < 0.0:
+    if _no_pull(p, base) and f < 0.0:
         return 0.0
     return f
 
@@ -130,7 +145,7 @@ def point_stiffness(p, base, d, rate):
     """``(dF/dd, dF/drate)`` of :func:`point_force` (0 where clipped)."""
     if d <= 0.0:
         return 0.0, 0.0
-    if p[base + 2] != 0.0 and p[base] * d + p[base + 1] * rate < 0.0:
+    if _no_pull(p, base) and p[base] * d + p[base + 1] * rate < 0.0:
         return 0.0, 0.0
     return p[base], p[base + 1]
 
@@ -138,7 +153,7 @@ def point_stiffness(p, base, d, rate):
 @kernel
 def point_force_rate(p, base, d, rate, accel=0.0):
     """``dF/dt = k d' + c d''`` in contact (``accel`` = d'', units of A_g omega_Ax^2)."""
-    if p[base + 2] != 0.0 and p[base] * d + p[base + 1] * rate < 0.0:
+    if _no_pull(p, base) and p[base] * d + p[base + 1] * rate < 0.0:
         return 0.0
     return p[base] * rate + p[base + 1] * accel
 
@@ -220,7 +235,7 @@ def line_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
         return 0.0, 0.0, d_lo, d_hi
     r_lo = rate_c - rate_slope * half_length
     r_hi = rate_c + rate_slope * half_length
-    if p[base + 2] != 0.0:
+    if _no_pull(p, base):
         a, b, g_a, g_b, _, pulls = _clipped_region(k, c, d_lo, d_hi, r_lo, r_hi)
         if pulls:
             ell = b - a
@@ -252,7 +267,7 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
     c = p[base + 1]
     length = 2.0 * half_length
     clipped = False
-    if p[base + 2] != 0.0:
+    if _no_pull(p, base):
         a, b, _, _, edge, clipped = _clipped_region(k, c, d_lo, d_hi, rate_lo, rate_hi)
     if clipped:
         ell = b - a
@@ -263,8 +278,9 @@ def line_gradient(p, base, d_lo, d_hi, rate_lo, rate_hi, half_length):
     else:
         n0, n1, n2 = moments(0.0, d_lo, d_hi)
         _, _, edge = _penetrated(d_lo, d_hi)
-    if p[base + 3] >= 0.0:  # the engine's flags decide whether an edge is inside the line
-        edge = _flagged_edge(p[base + 3] > 0.0, p[base + 4] > 0.0, d_lo, d_hi)
+    bits = int(p[base + 2])
+    if bits & SIDES_KNOWN:  # the engine's flags decide whether an edge is inside the line
+        edge = _flagged_edge((bits & SIDE_LO) != 0, (bits & SIDE_HI) != 0, d_lo, d_hi)
     bound = 0.0
     arm = 0.0
     if edge >= 0.0:
