@@ -394,6 +394,8 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             else:
                 t_ev = t_here + theta * h_try
                 end_value(dense, y, t_here, h_try, theta, p, 0, work, ends_tmp)
+                if LAW_MEMORY and n_vectors > 0:  # the onset's tangent vectors too
+                    dense_eval(DENSE_ROWS, dense, y, h_try, theta, work)
             if end == 0:
                 inside_lo = not inside_lo
                 if not two_ends:
