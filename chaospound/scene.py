@@ -241,6 +241,7 @@ _GLOBAL_SPECS: dict[str, _Spec] = {
                                "components", low=1.0, high=3.0),
     "length_unit": _pos("A_g in metres: the model's length unit, for a record", True),
     "tower_period": _pos("T_Ax in seconds: tower A's x period, for a record", True),
+    "tower_mass": _pos("m_A in kilograms: tower A's mass, the force unit of --units si", True),
     "freq_ratio": _pos("frequency ratio Om = T_Ax/T_Bx = omega_Bx/omega_Ax"),
     "mass_ratio": _pos("mass ratio m = m_A/m_B; 'auto': freq_ratio**2", optional=True),
     "gap": _nonneg("clear gap at rest, in units of A_g"),
@@ -302,7 +303,7 @@ _SUFFIXES = ("_A", "_B")
 _TARGET: dict[str, tuple[str, str]] = {
     **{n: ("excitation", n) for n in ("period_ratio", "ground", "ground_file", "ground_units",
                                       "ground_scale", "ground_dt", "length_unit",
-                                      "tower_period", *STOCHASTIC_FIELDS)},
+                                      "tower_period", "tower_mass", *STOCHASTIC_FIELDS)},
     **{
         n: ("scene", n)
         for n in ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping")
@@ -649,7 +650,11 @@ class Excitation:
     length_unit, tower_period : float, optional
         A_g [m] and T_Ax [s]: the physical length and time of the model's
         units, which convert a record or a stochastic motion to them (required
-        with either).
+        with either). With ``tower_mass`` m_A [kg] they are the scene's physical
+        units (docs/units.md): ``--units si`` reports in m/s, kN and mm.
+    tower_mass : float, optional
+        m_A [kg]: with ``length_unit`` and ``tower_period``, the force unit
+        A_g K_Ax = A_g m_A omega_Ax^2 (not used by the dynamics).
     ground_seed, ground_duration, ground_omega_g, ground_zeta_g, ground_omega_f,
     ground_zeta_f, ground_intensity, ground_pga, ground_envelope, ground_t_rise,
     ground_t_plateau, ground_decay, ground_sh_b, ground_sh_c, ground_components
@@ -671,6 +676,7 @@ class Excitation:
     ground_dt: float | None = None
     length_unit: float | None = None
     tower_period: float | None = None
+    tower_mass: float | None = None
     ground_seed: int = 0
     ground_duration: float = 20.0
     ground_omega_g: float = 15.6
@@ -1436,7 +1442,7 @@ def _updated(component: object, label: str, values: Mapping[str, object]) -> obj
 # ================================================================== TOML
 _TABLES: dict[str, tuple[str, ...]] = {
     "excitation": ("period_ratio", "ground", "ground_file", "ground_units", "ground_scale",
-                   "ground_dt", "length_unit", "tower_period", *STOCHASTIC_FIELDS),
+                   "ground_dt", "length_unit", "tower_period", "tower_mass", *STOCHASTIC_FIELDS),
     "ground": (),  # [ground] motion = "...", file = "...": the ground_* names without prefix
     "structure": ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping"),
     "tower_A": tuple(_TOWER_SPECS),
@@ -1446,6 +1452,7 @@ _TABLES: dict[str, tuple[str, ...]] = {
     "run": tuple(_RUN_SPECS),
     "initial": ("state",),
     "sweep": (),  # any flat parameter name
+    "physical": (),  # SI quantities (chaospound.units.from_physical)
 }
 _TOP_KEYS = ("name", "description")
 
@@ -1475,7 +1482,7 @@ def _scene_from_tables(data: Mapping[str, object]) -> Scene:
             raise _unknown(key, known, "key in [ground]:")
         flat[name] = value
     for table, keys in _TABLES.items():
-        if table in ("initial", "sweep", "ground"):
+        if table in ("initial", "sweep", "ground", "physical"):
             continue
         for key, value in data.get(table, {}).items():
             if table == "excitation" and key in flat:
@@ -1485,6 +1492,8 @@ def _scene_from_tables(data: Mapping[str, object]) -> Scene:
             if key not in keys:
                 raise _unknown(key, keys, f"key in [{table}]:")
             flat[key + table[-2:] if table.startswith("tower") else key] = value
+    if "physical" in data:
+        _add_physical(data["physical"], flat)
     initial = data.get("initial", {})
     for key in initial:
         if key != "state":
@@ -1497,6 +1506,31 @@ def _scene_from_tables(data: Mapping[str, object]) -> Scene:
     if "state" in initial:
         flat["initial_state"] = initial["state"]
     return base.with_params(**flat)
+
+
+def _add_physical(table: Mapping[str, object], flat: dict[str, object]) -> None:
+    """Convert a [physical] table (SI, :func:`chaospound.units.from_physical`) into ``flat``.
+
+    The law, exponent and ground motion it needs come from the other tables; a
+    parameter given both in SI and dimensionless is an error.
+    """
+    from chaospound.units import PhysicalUnitsError, from_physical
+
+    law = _coerce("contact_law", flat.get("contact_law", "hertz"))
+    chi = _coerce("chi", flat.get("chi", DEFAULT_CHI))
+    ground = _coerce("ground", flat.get("ground", "sine"))
+    try:
+        converted, _ = from_physical(table, ground=ground, law=law, chi=chi)
+    except PhysicalUnitsError as exc:
+        raise SceneError(str(exc)) from None
+    for name, value in converted.items():
+        covered = {name, *(n for n, targets in SHORTHANDS.items() if name in targets),
+                   *SHORTHANDS.get(name, ())}
+        clash = sorted(covered & set(flat))
+        if clash:
+            raise SceneError(f"{clash[0]} given in [physical] (SI) and in another table: "
+                             "give it once")
+        flat[name] = value
 
 
 def _toml_document(scene: Scene) -> str:
