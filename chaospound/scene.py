@@ -493,7 +493,10 @@ def _unknown(
     close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
     hints = ["did you mean " + " or ".join(repr(c) for c in close) + "?"] if close else []
     if listing or not close:
-        hints.append("known: " + ", ".join(known))
+        shown = [n for n in known if n not in STOCHASTIC_FIELDS]
+        if len(shown) < len(known):  # 15 names: the line would pass 1000 characters
+            shown.append("the stochastic motion's ground_* ('chaospound params')")
+        hints.append("known: " + ", ".join(shown))
     return SceneError(f"unknown {what} {shorten(name, quote=True)} ({'; '.join(hints)})")
 
 
