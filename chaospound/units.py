@@ -289,3 +289,31 @@ def si_value(units: PhysicalUnits, kind: str, value: float) -> float:
 
 #: units of :func:`si_value`'s kinds
 SI_UNITS = {"time": "s", "velocity": "m/s", "force": "kN", "length": "mm", "rotation": "rad"}
+
+
+def si_impacts(impacts, units: PhysicalUnits) -> dict:
+    """A run's impact table in SI: onset ``time`` [s], ``velocity`` [m/s],
+    ``peak_penetration`` [mm], ``peak_force`` [kN], ``duration`` [s] (arrays).
+
+    Parameters
+    ----------
+    impacts : chaospound.simulate.Impacts
+    units : PhysicalUnits
+        With the mass (the force unit).
+    """
+    return {"time": si_value(units, "time", impacts.time),
+            "velocity": si_value(units, "velocity", impacts.velocity),
+            "peak_penetration": si_value(units, "length", impacts.peak_penetration),
+            "peak_force": si_value(units, "force", impacts.peak_force),
+            "duration": si_value(units, "time", impacts.duration)}
+
+
+def require_si(scene) -> PhysicalUnits:
+    """The scene's physical units with a mass, else a one-line :class:`PhysicalUnitsError`
+    (what ``--units si`` needs)."""
+    units = units_of(scene)
+    if units is None or units.mass is None:
+        raise PhysicalUnitsError("--units si needs the scene's length_unit [m], tower_period "
+                                 "[s] and tower_mass [kg] (--set NAME=VALUE, or a [physical] "
+                                 "table: docs/units.md)")
+    return units

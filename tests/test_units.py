@@ -15,7 +15,16 @@ import pytest
 from chaospound import load_preset
 from chaospound.scene import Scene, SceneError
 from chaospound.simulate import simulate
-from chaospound.units import GRAVITY, PhysicalUnits, conversion_rows, si_value, units_of
+from chaospound.units import (
+    GRAVITY,
+    PhysicalUnits,
+    PhysicalUnitsError,
+    conversion_rows,
+    require_si,
+    si_impacts,
+    si_value,
+    units_of,
+)
 
 T_A, A_G, M_A = 0.5, 0.01, 1.0e6
 K_A = M_A * (2.0 * math.pi / T_A) ** 2
@@ -85,6 +94,12 @@ def test_si_force_is_the_si_hertz_law_of_the_si_penetration():
     d_si = si_value(units, "length", run.impacts.peak_penetration) / 1e3
     np.testing.assert_allclose(si_value(units, "force", run.impacts.peak_force),
                                beta_si * d_si**1.5 / 1e3, rtol=1e-12)
+    table = si_impacts(run.impacts, require_si(scene))
+    omega = 2.0 * math.pi / T_A
+    np.testing.assert_allclose(table["velocity"], run.impacts.velocity * A_G * omega, rtol=1e-15)
+    np.testing.assert_allclose(table["time"], run.impacts.time / omega, rtol=1e-15)
+    with pytest.raises(PhysicalUnitsError, match="needs the scene's length_unit"):
+        require_si(load_preset("fig3a").with_params(length_unit=0.01, tower_period=0.5))
 
 
 def test_conversion_table_rows():
