@@ -509,6 +509,7 @@ def plot_quake(run: QuakeRun, units=None):
 
         acc = a_g * units.acceleration / GRAVITY
         labels = ("t [s]", "u_g'' [g]", "x - u_g [mm]", "clearance [mm]", "force [kN]")
+        force_unit = "kN"
     else:
         def tt(v):
             return v
@@ -517,6 +518,7 @@ def plot_quake(run: QuakeRun, units=None):
         acc = a_g
         labels = ("t (omega_Ax)", "u_g'' (A_g omega_Ax^2)", "x - u_g (A_g)", "clearance (A_g)",
                   "force (A_g K_Ax)")
+        force_unit = "A_g K_Ax"
     fig = Figure(figsize=(10.0, 9.0), layout="constrained")
     axes = fig.subplots(4, 1, sharex=True)
     axes[0].plot(tt(t_g), acc, lw=0.6, color="0.3")
@@ -537,5 +539,5 @@ def plot_quake(run: QuakeRun, units=None):
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel(labels[0])
     fig.suptitle(f"{run.scene.name}: {run.impacts} impacts, peak force "
-                 f"{force(run.peak_force):.4g} {labels[4].split()[-1].strip('[]()')}")
+                 f"{force(run.peak_force):.4g} {force_unit}")
     return fig
