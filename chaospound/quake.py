@@ -324,7 +324,7 @@ def quake(
     end = motion_end(block)
     cycles = _cycles(scene, end, tail)
     scene = scene.with_params(record=cycles)
-    sim = simulate(scene, samples_per_cycle=samples_per_cycle)
+    sim = _finite_trajectory(simulate(scene, samples_per_cycle=samples_per_cycle))
     system = System.from_scene(scene)
     ground = _ground_displacement(system, sim.trajectory.time)
     result = QuakeRun(
@@ -335,6 +335,24 @@ def quake(
         ensemble=ensemble(scene, runs, perturb, scale_spread, seed) if runs > 0 else None,
     )
     return result
+
+
+def _finite_trajectory(sim: Simulation) -> Simulation:
+    """The run with the unfilled rows of its trajectory dropped.
+
+    Under a record the engine may skip a dense sample whose time coincides, to
+    rounding, with the end of a step landed on a record sample; the rows that are
+    filled carry their own times, the skipped ones stay NaN at the end of the table.
+    """
+    from dataclasses import replace
+
+    from chaospound.simulate import Trajectory
+
+    traj = sim.trajectory
+    keep = np.isfinite(traj.time)
+    if keep.all():
+        return sim
+    return replace(sim, trajectory=Trajectory(traj.time[keep], traj.state[keep]))
 
 
 def corner_peaks(sim: Simulation) -> list[CornerPeaks]:
