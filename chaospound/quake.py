@@ -490,6 +490,38 @@ def ensemble(scene: Scene, runs: int, perturb: float = 0.0, scale_spread: float 
     return Ensemble(peaks, counts, perturb, scale_spread, percentiles)
 
 
+def contact_force(run: QuakeRun) -> np.ndarray:
+    """The contact force on A along -x at the trajectory's samples (A_g K_Ax).
+
+    The model's ``model_forces`` at each sample, with the contact law's
+    per-episode memory (hertzdamp's and hunt-crossley's onset velocity v0) written
+    at every recorded onset as the engine writes it (``law_on_onset`` with the
+    closing rate at the onset state), so that the dissipative laws' forces are
+    those of the run.
+    """
+    sim = run.simulation
+    system = System.from_scene(run.scene)
+    module = system.engine().module
+    p = system.params.copy()
+    imp = sim.impacts
+    ends = np.empty(4)
+    q = np.empty(6)
+    times, states = sim.trajectory.time, sim.trajectory.state
+    out = np.empty(times.shape[0])
+    memory = bool(module.LAW_MEMORY)
+    onset = 0
+    for i in range(times.shape[0]):
+        t = float(times[i])
+        while memory and onset < len(imp) and imp.time[onset] <= t:
+            module.model_ends(float(imp.time[onset]), imp.state[onset], p, ends)
+            rate = module.model_contact_point(float(imp.time[onset]), imp.state[onset], p,
+                                              ends)[2]
+            module.law_on_onset(p, module.LAW, rate)
+            onset += 1
+        out[i] = module.model_forces(t, states[i], p, q)
+    return out
+
+
 def plot_quake(run: QuakeRun, units=None):
     """Time histories of an earthquake run: ground acceleration, displacements relative
     to the ground, the clearance with the impacts, the contact force.
@@ -551,7 +583,7 @@ def plot_quake(run: QuakeRun, units=None):
     imp = sim.impacts
     axes[2].plot(tt(imp.time), np.zeros(len(imp)), "v", color="C3", ms=4, label="impacts")
     axes[2].legend(loc="upper right", fontsize="small")
-    axes[3].plot(tt(time), force(contact.force), lw=0.8, color="C3")
+    axes[3].plot(tt(time), force(contact_force(run)), lw=0.8, color="C3")
     for ax, label in zip(axes, labels[1:], strict=True):
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)

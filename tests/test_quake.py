@@ -105,3 +105,18 @@ def test_bad_inputs(record_file, tmp_path):
         quake(_wall())
     with pytest.raises(ValueError, match="scale_spread"):
         ensemble(quake_scene(_wall(), record_file), 2, scale_spread=1.5)
+
+
+def test_contact_force_history_uses_the_episode_memory(record_file):
+    """The sampled force of a memory law (hertzdamp: xi = zeta / v0 per episode) peaks
+    within 2 % of the engine's recorded episode peaks; the fresh packed vector's
+    v0 (simulate.contact_history's) would not."""
+    from chaospound.quake import contact_force
+
+    scene = _wall(contact_law="hertzdamp", restitution=0.6)
+    run = quake(scene, record=record_file, lyapunov=False, samples_per_cycle=2000)
+    force = contact_force(run)
+    assert run.impacts > 3
+    assert force.max() == pytest.approx(run.peak_force, rel=0.02)
+    assert np.all(force[run.simulation.trajectory.state[:, 0] - run.ground_displacement
+                        < 2.0 - 1e-9] == 0.0)
