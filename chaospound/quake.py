@@ -147,6 +147,8 @@ class Ensemble:
         The initial-state perturbation (A_g) and the relative record-scale spread.
     percentiles : dict
         {5, 25, 50, 75, 95: value}.
+    realisations : bool
+        Each run its own stochastic realisation (ground_seed + i).
     """
 
     peak_force: np.ndarray
@@ -154,6 +156,7 @@ class Ensemble:
     perturb: float
     scale_spread: float
     percentiles: dict = field(default_factory=dict)
+    realisations: bool = False
 
     @property
     def spread(self) -> float:
@@ -224,7 +227,7 @@ class QuakeRun:
         if self.ensemble is not None:
             e = self.ensemble
             out["ensemble"] = {"runs": int(e.peak_force.size), "perturb": e.perturb,
-                               "scale_spread": e.scale_spread,
+                               "scale_spread": e.scale_spread, "realisations": e.realisations,
                                "peak_force": e.peak_force.tolist(),
                                "impacts": e.impacts.tolist(),
                                "percentiles": {f"{k:g}": v for k, v in e.percentiles.items()},
@@ -455,17 +458,20 @@ def finite_time_lyapunov(scene: Scene, cycles: int, separation: float = SEPARATI
 
 
 def ensemble(scene: Scene, runs: int, perturb: float = 0.0, scale_spread: float = 0.0,
-             seed: int = 0) -> Ensemble:
+             seed: int = 0, realisations: bool = False) -> Ensemble:
     """Peak impact force over ``runs`` runs from perturbed initial states or record scales.
 
     Run i starts from the scene's initial state plus ``perturb`` times a random
     unit vector (seeded by ``seed``) and/or with ``ground_scale`` multiplied by
-    ``1 + scale_spread u_i``, u_i uniform in [-1, 1]. The scene must be set up by
-    :func:`quake_scene` with its record length (``quake`` does it). Zero
-    perturbation and spread repeat the same run: zero spread.
+    ``1 + scale_spread u_i``, u_i uniform in [-1, 1]; with ``realisations`` (a
+    stochastic motion) it also runs its own realisation, ``ground_seed + i``. The
+    scene must be set up by :func:`quake_scene` with its record length (``quake``
+    does it). Zero perturbation and spread repeat the same run: zero spread.
     """
     if runs < 1:
         raise ValueError(f"runs = {runs}: must be >= 1")
+    if realisations and scene.excitation.ground != "stochastic":
+        raise ValueError(f"realisations: ground = {scene.excitation.ground}, not stochastic")
     for name, value in (("perturb", perturb), ("scale_spread", scale_spread)):
         if not (math.isfinite(value) and value >= 0.0):
             raise ValueError(f"{name} = {value!r}: must be >= 0")
@@ -478,16 +484,18 @@ def ensemble(scene: Scene, runs: int, perturb: float = 0.0, scale_spread: float 
         direction = rng.normal(size=base.shape[0])
         u = rng.uniform(-1.0, 1.0)
         member = scene
+        if realisations:
+            member = member.with_params(ground_seed=scene.excitation.ground_seed + i)
         if scale_spread > 0.0:
-            member = scene.with_params(ground_scale=scene.excitation.ground_scale
-                                       * (1.0 + scale_spread * u))
+            member = member.with_params(ground_scale=scene.excitation.ground_scale
+                                        * (1.0 + scale_spread * u))
         start = base + perturb * direction / np.linalg.norm(direction)
         sim = simulate(member, initial_state=start)
         force = sim.impacts.peak_force
         peaks[i] = float(np.nanmax(force)) if force.size else 0.0
         counts[i] = len(sim.impacts)
     percentiles = {q: float(np.percentile(peaks, q)) for q in PERCENTILES}
-    return Ensemble(peaks, counts, perturb, scale_spread, percentiles)
+    return Ensemble(peaks, counts, perturb, scale_spread, percentiles, realisations)
 
 
 def contact_force(run: QuakeRun) -> np.ndarray:

@@ -95,6 +95,7 @@ def test_bad_record_file_is_one_line_exit_2(capsys, tmp_path, content, words):
     (["--record", "/nonexistent/x.AT2"], "not found"),
     ([], "needs a record"),
     (["--record", "{record}", "--perturb", "1e-6"], "need --ensemble"),
+    (["--record", "{record}", "--ensemble", "2", "--realisations"], "not stochastic"),
     (["--record", "{record}", "--units", "si"], "tower_mass"),
     (["--record", "{record}", "--scale-spread", "1.5", "--ensemble", "2"], "--scale-spread"),
     (["--record", "{record}", "--set", "ground_pga=-1"], "ground_pga"),

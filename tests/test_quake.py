@@ -120,3 +120,16 @@ def test_contact_force_history_uses_the_episode_memory(record_file):
     assert force.max() == pytest.approx(run.peak_force, rel=0.02)
     assert np.all(force[run.simulation.trajectory.state[:, 0] - run.ground_displacement
                         < 2.0 - 1e-9] == 0.0)
+
+
+def test_ensemble_of_realisations_is_the_runs_of_each_seed():
+    scene = quake_scene(_wall(ground="stochastic", ground_pga=0.4, ground_duration=3.0,
+                              ground_t_rise=0.5, ground_t_plateau=2.0, gap=0.5,
+                              ground_seed=5)).with_params(record=12)
+    runs = ensemble(scene, 3, realisations=True)
+    for i in range(3):
+        alone = simulate(scene.with_params(ground_seed=5 + i)).impacts.peak_force
+        assert runs.peak_force[i] == (np.max(alone) if alone.size else 0.0)
+    assert runs.spread > 0.0
+    with pytest.raises(ValueError, match="not stochastic"):
+        ensemble(scene.with_params(ground="sine"), 2, realisations=True)

@@ -72,6 +72,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     analysis.add_argument("--scale-spread", type=_float(0.0, False, 1.0), default=0.0,
                           metavar="S", help="ensemble: record scale times 1 + S u, u uniform "
                           "in [-1, 1]")
+    analysis.add_argument("--realisations", action="store_true",
+                          help="ensemble: each run its own stochastic realisation "
+                          "(ground_seed + i): the distribution of the peak force over records")
     analysis.add_argument("--seed", type=_count0, default=0, metavar="N",
                           help="seed of the perturbation directions and scales (default 0)")
     analysis.add_argument("--samples", type=_count, default=100, metavar="N",
@@ -97,11 +100,13 @@ def _cmd_quake(args: argparse.Namespace) -> int:
     from chaospound.quake import ensemble, finite_time_lyapunov, quake, quake_scene
     from chaospound.units import require_si, units_of
 
-    if args.ensemble == 0 and (args.perturb or args.scale_spread):
-        raise CliError("--perturb and --scale-spread need --ensemble N")
+    if args.ensemble == 0 and (args.perturb or args.scale_spread or args.realisations):
+        raise CliError("--perturb, --scale-spread and --realisations need --ensemble N")
     if args.record_file is not None and not os.path.isfile(args.record_file):
         raise CliError(f"record file {_path(args.record_file)} not found")
     scene = quake_scene(scene_from_args(args), args.record_file, args.scale)
+    if args.realisations and scene.excitation.ground != "stochastic":
+        raise CliError(f"--realisations: ground = {scene.excitation.ground}, not stochastic")
     units = require_si(scene) if args.units == "si" else units_of(scene)
     if args.output is not None:
         check_output_path(args.output, overwrite=args.overwrite)
@@ -118,7 +123,8 @@ def _cmd_quake(args: argparse.Namespace) -> int:
         if args.ensemble:
             status.set(f"ensemble of {args.ensemble} runs")
             run = _replace(run, ensemble=ensemble(run.scene, args.ensemble, args.perturb,
-                                                  args.scale_spread, args.seed))
+                                                  args.scale_spread, args.seed,
+                                                  args.realisations))
         if args.plot is not None:
             from chaospound.quake import plot_quake
 
@@ -229,7 +235,8 @@ def _report(run, units, args: argparse.Namespace) -> str:
         summary.append((f"ensemble ({e.peak_force.size} runs)",
                         f"peak force {shown} {unit['force']}; spread (max - min) "
                         f"{value('force', e.spread)} (perturb {e.perturb:g} A_g, scale spread "
-                        f"{e.scale_spread:g})"))
+                        f"{e.scale_spread:g}"
+                        + (", one realisation each" if e.realisations else "") + ")"))
     if args.plot is not None:
         summary.append(("wrote", args.plot))
     if args.output is not None:
