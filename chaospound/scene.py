@@ -110,7 +110,16 @@ PAPER_RTOL = 1e-3  #: Press et al.'s Cash-Karp at 0.1 % error (docs/model.md sec
 #: about 100 MB; TOML parses in about 0.1 s per MB
 MAX_SCENE_BYTES = 128 * 2**20
 
-GROUNDS = ("sine", "none", "record")
+GROUNDS = ("sine", "none", "record", "stochastic")
+ENVELOPES = ("jennings", "saragoni-hart", "none")  #: a stochastic motion's envelopes
+#: the stochastic motion's fields (SI; physics/ground/stochastic.py names them without the
+#: ``ground_`` prefix): docs/ground_motions.md section 6
+STOCHASTIC_FIELDS = ("ground_seed", "ground_duration", "ground_omega_g", "ground_zeta_g",
+                     "ground_omega_f", "ground_zeta_f", "ground_intensity", "ground_pga",
+                     "ground_envelope", "ground_t_rise", "ground_t_plateau", "ground_decay",
+                     "ground_sh_b", "ground_sh_c", "ground_components")
+STANDARD_GRAVITY = 9.80665  #: g [m/s^2]
+DEFAULT_STOCHASTIC_DT = 0.01  #: sample interval [s] of a stochastic motion
 RECORD_UNITS = ("auto", "g", "m/s^2", "cm/s^2")  #: accelerogram units ("auto": the file's, else g)
 CONTACT_LAWS = tuple(LAWS)  #: the contact laws (chaospound/physics/contact/, one module each)
 DAMPING_VARIANTS = ("lankarani-nikravesh", "ye")  #: hertzdamp's damping formulas
@@ -201,16 +210,38 @@ def _real(meaning: str) -> _Spec:
 
 _GLOBAL_SPECS: dict[str, _Spec] = {
     "period_ratio": _pos("excitation period over tower A's, T/T_Ax"),
-    "ground": _Spec("choice", "ground motion: u_g = sin(t/r), none, or a recorded accelerogram",
-                    choices=GROUNDS),
+    "ground": _Spec("choice", "ground motion: u_g = sin(t/r), none, a recorded accelerogram, "
+                    "or filtered white noise (stochastic)", choices=GROUNDS),
     "ground_file": _Spec("path", "accelerogram file (.AT2 or text: time, acceleration)",
                          optional=True),
     "ground_units": _Spec("choice", "units of the accelerogram ('auto': the file's, else g)",
                           choices=RECORD_UNITS),
     "ground_scale": _Spec("float", "factor on the recorded accelerations"),
-    "ground_dt": _pos("sample interval [s] of a text record without a time column", True),
+    "ground_dt": _pos("sample interval [s] of a text record without a time column, or of a "
+                      "stochastic motion (auto: 0.01 s)", True),
+    "ground_seed": _Spec("int", "stochastic: seed of the white noise (same seed, same bits)",
+                         low=0.0),
+    "ground_duration": _pos("stochastic: length of the motion [s]"),
+    "ground_omega_g": _pos("stochastic: Kanai-Tajimi ground frequency omega_g [rad/s]"),
+    "ground_zeta_g": _pos("stochastic: Kanai-Tajimi ground damping ratio zeta_g"),
+    "ground_omega_f": _pos("stochastic: Clough-Penzien high-pass frequency omega_f [rad/s]"),
+    "ground_zeta_f": _pos("stochastic: Clough-Penzien high-pass damping ratio zeta_f"),
+    "ground_intensity": _pos("stochastic: two-sided white-noise density S0 [m^2/s^3] "
+                             "(give it or ground_pga)", True),
+    "ground_pga": _pos("stochastic: peak ground acceleration [g] the realisation is scaled "
+                       "to (give it or ground_intensity)", True),
+    "ground_envelope": _Spec("choice", "stochastic: envelope (Jennings et al. 1968, "
+                             "Saragoni & Hart 1974, or stationary)", choices=ENVELOPES),
+    "ground_t_rise": _nonneg("stochastic, jennings: end of the quadratic rise [s]"),
+    "ground_t_plateau": _nonneg("stochastic, jennings: end of the strong phase [s]"),
+    "ground_decay": _pos("stochastic, jennings: decay rate of the tail [1/s]"),
+    "ground_sh_b": _pos("stochastic, saragoni-hart: exponent b of t^b exp(-c t)"),
+    "ground_sh_c": _pos("stochastic, saragoni-hart: rate c of t^b exp(-c t) [1/s]"),
+    "ground_components": _Spec("int", "stochastic: 1 (x) or 2 (independent x and y) "
+                               "components", low=1.0, high=3.0),
     "length_unit": _pos("A_g in metres: the model's length unit, for a record", True),
     "tower_period": _pos("T_Ax in seconds: tower A's x period, for a record", True),
+    "tower_mass": _pos("m_A in kilograms: tower A's mass, the force unit of --units si", True),
     "freq_ratio": _pos("frequency ratio Om = T_Ax/T_Bx = omega_Bx/omega_Ax"),
     "mass_ratio": _pos("mass ratio m = m_A/m_B; 'auto': freq_ratio**2", optional=True),
     "gap": _nonneg("clear gap at rest, in units of A_g"),
@@ -272,7 +303,7 @@ _SUFFIXES = ("_A", "_B")
 _TARGET: dict[str, tuple[str, str]] = {
     **{n: ("excitation", n) for n in ("period_ratio", "ground", "ground_file", "ground_units",
                                       "ground_scale", "ground_dt", "length_unit",
-                                      "tower_period")},
+                                      "tower_period", "tower_mass", *STOCHASTIC_FIELDS)},
     **{
         n: ("scene", n)
         for n in ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping")
@@ -462,7 +493,10 @@ def _unknown(
     close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
     hints = ["did you mean " + " or ".join(repr(c) for c in close) + "?"] if close else []
     if listing or not close:
-        hints.append("known: " + ", ".join(known))
+        shown = [n for n in known if n not in STOCHASTIC_FIELDS]
+        if len(shown) < len(known):  # 15 names: the line would pass 1000 characters
+            shown.append("the stochastic motion's ground_* ('chaospound params')")
+        hints.append("known: " + ", ".join(shown))
     return SceneError(f"unknown {what} {shorten(name, quote=True)} ({'; '.join(hints)})")
 
 
@@ -618,7 +652,23 @@ class Excitation:
         Sample interval [s] of a text file without a time column.
     length_unit, tower_period : float, optional
         A_g [m] and T_Ax [s]: the physical length and time of the model's
-        units, which convert a record to them (required with a record).
+        units, which convert a record or a stochastic motion to them (required
+        with either). With ``tower_mass`` m_A [kg] they are the scene's physical
+        units (docs/units.md): ``--units si`` reports in m/s, kN and mm.
+    tower_mass : float, optional
+        m_A [kg]: with ``length_unit`` and ``tower_period``, the force unit
+        A_g K_Ax = A_g m_A omega_Ax^2 (not used by the dynamics).
+    ground_seed, ground_duration, ground_omega_g, ground_zeta_g, ground_omega_f,
+    ground_zeta_f, ground_intensity, ground_pga, ground_envelope, ground_t_rise,
+    ground_t_plateau, ground_decay, ground_sh_b, ground_sh_c, ground_components
+        The stochastic motion (``ground = "stochastic"``, docs/ground_motions.md
+        section 5), in SI: seed, duration [s], Kanai-Tajimi omega_g [rad/s] and
+        zeta_g, Clough-Penzien omega_f [rad/s] and zeta_f, either the white-noise
+        density S0 [m^2/s^3] or a peak ground acceleration [g] the realisation is
+        scaled to, the envelope ("jennings": t_rise [s], t_plateau [s], decay
+        [1/s]; "saragoni-hart": b, c [1/s]; "none") and 1 or 2 components.
+        ``ground_dt`` [s] is the sample interval (default 0.01 s), ``ground_scale``
+        a factor on the accelerations.
     """
 
     period_ratio: float = DEFAULT_PERIOD_RATIO
@@ -629,6 +679,22 @@ class Excitation:
     ground_dt: float | None = None
     length_unit: float | None = None
     tower_period: float | None = None
+    tower_mass: float | None = None
+    ground_seed: int = 0
+    ground_duration: float = 20.0
+    ground_omega_g: float = 15.6
+    ground_zeta_g: float = 0.6
+    ground_omega_f: float = 1.5
+    ground_zeta_f: float = 0.6
+    ground_intensity: float | None = None
+    ground_pga: float | None = None
+    ground_envelope: str = "jennings"
+    ground_t_rise: float = 2.0
+    ground_t_plateau: float = 10.0
+    ground_decay: float = 0.3
+    ground_sh_b: float = 2.0
+    ground_sh_c: float = 0.5
+    ground_components: int = 1
 
     def __post_init__(self) -> None:
         _check_fields(self, _GLOBAL_SPECS)
@@ -638,6 +704,81 @@ class Excitation:
             if missing:
                 raise SceneError(f"ground = record needs {', '.join(missing)} "
                                  "(the file and the model's length and time units)")
+        if self.ground == "stochastic":
+            self._check_stochastic()
+
+    def _check_stochastic(self) -> None:
+        missing = [n for n in ("length_unit", "tower_period") if getattr(self, n) is None]
+        if missing:
+            raise SceneError(f"ground = stochastic needs {', '.join(missing)} (the model's "
+                             "length and time units: the motion is given in SI)")
+        if (self.ground_intensity is None) == (self.ground_pga is None):
+            raise SceneError("ground = stochastic needs exactly one of ground_intensity "
+                             "(S0 [m^2/s^3]) and ground_pga (peak acceleration [g])")
+        dt = self.stochastic_dt
+        if not self.ground_duration >= dt:
+            raise SceneError(f"ground_duration = {self.ground_duration:g} s: must cover at "
+                             f"least one sample interval (ground_dt = {dt:g} s)")
+        if self.ground_envelope == "jennings" and self.ground_t_plateau < self.ground_t_rise:
+            raise SceneError(f"ground_t_plateau = {self.ground_t_plateau:g} s: must be >= "
+                             f"ground_t_rise = {self.ground_t_rise:g} s")
+        if self.ground_seed >= 2**63:
+            raise SceneError(f"ground_seed = {self.ground_seed}: must be < 2**63")
+
+    @property
+    def stochastic_dt(self) -> float:
+        """Sample interval [s] of a stochastic motion (``ground_dt``, default 0.01 s)."""
+        return DEFAULT_STOCHASTIC_DT if self.ground_dt is None else self.ground_dt
+
+    def stochastic_spec(self) -> dict:
+        """The spec of :mod:`chaospound.physics.ground.stochastic` in model units.
+
+        The SI fields converted with A_g = ``length_unit`` and omega_Ax =
+        2 pi / ``tower_period`` (``stochastic.model_parameters``). With
+        ``ground_pga`` the density is a nominal 1 m^2/s^3 (the realisation is
+        rescaled afterwards, :meth:`stochastic_block`).
+        """
+        from chaospound.physics.ground import stochastic
+
+        envelope = {"jennings": {"t_rise": self.ground_t_rise, "t_plateau": self.ground_t_plateau,
+                                 "decay": self.ground_decay},
+                    "saragoni-hart": {"b": self.ground_sh_b, "c": self.ground_sh_c},
+                    "none": {}}[self.ground_envelope]
+        si = {"omega_g": self.ground_omega_g, "zeta_g": self.ground_zeta_g,
+              "omega_f": self.ground_omega_f, "zeta_f": self.ground_zeta_f,
+              "intensity": self.ground_intensity if self.ground_pga is None else 1.0,
+              "dt": self.stochastic_dt, "duration": self.ground_duration,
+              "seed": self.ground_seed, "envelope": self.ground_envelope,
+              "components": self.ground_components, **envelope}
+        return stochastic.model_parameters(si, self.length_unit, 2.0 * math.pi / self.tower_period)
+
+    def stochastic_block(self) -> np.ndarray:
+        """The block of the stochastic motion: one realisation, in model units.
+
+        ``stochastic.generate`` (seeded: the same fields give the same bits), the
+        accelerations multiplied by ``ground_scale`` and, with ``ground_pga``, by the
+        factor that makes the peak of |u_g''| of x (before the baseline correction)
+        that PGA (y keeps its ratio to x); then the record's baseline correction and
+        exact integration (``record.block_from_samples``).
+        """
+        from chaospound.physics.ground import record, stochastic
+
+        t, a_x, a_y = stochastic.generate(self.stochastic_spec())
+        factor = self.ground_scale
+        if self.ground_pga is not None:
+            omega = 2.0 * math.pi / self.tower_period
+            target = self.ground_pga * STANDARD_GRAVITY / (self.length_unit * omega**2)
+            factor *= target / float(np.max(np.abs(a_x)))
+        a_y = None if a_y is None else a_y * factor
+        return record.block_from_samples(t, a_x * factor, a_y)
+
+    def ground_block(self) -> np.ndarray | None:
+        """The block a record or a stochastic motion appends to the packed vector."""
+        if self.ground == "record":
+            return self.record_block()
+        if self.ground == "stochastic":
+            return self.stochastic_block()
+        return None
 
     def record_block(self) -> np.ndarray:
         """The block of a recorded ground motion (its samples in model units)."""
@@ -910,8 +1051,9 @@ class Scene:
         )
         if self.contact.contact_law != "hertz":  # Hertz's block is (P_BETA, P_CHI)
             p = np.concatenate((p, self.law_block()))
-        if self.excitation.ground == "record":  # after the law's block
-            p = np.concatenate((p, self.excitation.record_block()))
+        ground = self.excitation.ground_block()
+        if ground is not None:  # after the law's block
+            p = np.concatenate((p, ground))
         return p
 
     def law_block(self) -> np.ndarray:
@@ -1303,7 +1445,8 @@ def _updated(component: object, label: str, values: Mapping[str, object]) -> obj
 # ================================================================== TOML
 _TABLES: dict[str, tuple[str, ...]] = {
     "excitation": ("period_ratio", "ground", "ground_file", "ground_units", "ground_scale",
-                   "ground_dt", "length_unit", "tower_period"),
+                   "ground_dt", "length_unit", "tower_period", "tower_mass", *STOCHASTIC_FIELDS),
+    "ground": (),  # [ground] motion = "...", file = "...": the ground_* names without prefix
     "structure": ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping"),
     "tower_A": tuple(_TOWER_SPECS),
     "tower_B": tuple(_TOWER_SPECS),
@@ -1312,10 +1455,14 @@ _TABLES: dict[str, tuple[str, ...]] = {
     "run": tuple(_RUN_SPECS),
     "initial": ("state",),
     "sweep": (),  # any flat parameter name
+    "physical": (),  # SI quantities (chaospound.units.from_physical)
 }
 _TOP_KEYS = ("name", "description")
 
 
+#: the [ground] table's keys that are not the ground_* names without their prefix
+_GROUND_KEYS = {"motion": "ground", "length_unit": "length_unit", "tower_period": "tower_period",
+                "period_ratio": "period_ratio"}
 #: the short keys of the [contact] table: law = "hertzdamp", variant = "ye"
 _CONTACT_KEYS = {"law": "contact_law", "variant": "damping_variant"}
 
@@ -1330,15 +1477,26 @@ def _scene_from_tables(data: Mapping[str, object]) -> Scene:
         if not isinstance(value, dict):
             raise SceneError(f"[{key}] must be a table, got {_show(value)}")
     flat: dict[str, object] = {}
+    for key, value in data.get("ground", {}).items():
+        name = _GROUND_KEYS.get(key, "ground_" + key)
+        if name not in _TABLES["excitation"] or key == "ground":
+            known = list(_GROUND_KEYS) + [n.removeprefix("ground_") for n in _TABLES["excitation"]
+                                          if n.startswith("ground_")]
+            raise _unknown(key, known, "key in [ground]:")
+        flat[name] = value
     for table, keys in _TABLES.items():
-        if table in ("initial", "sweep"):
+        if table in ("initial", "sweep", "ground", "physical"):
             continue
         for key, value in data.get(table, {}).items():
+            if table == "excitation" and key in flat:
+                raise SceneError(f"{key} given in [excitation] and in [ground]: give it once")
             if table == "contact" and key in _CONTACT_KEYS:
                 key = _CONTACT_KEYS[key]
             if key not in keys:
                 raise _unknown(key, keys, f"key in [{table}]:")
             flat[key + table[-2:] if table.startswith("tower") else key] = value
+    if "physical" in data:
+        _add_physical(data["physical"], flat)
     initial = data.get("initial", {})
     for key in initial:
         if key != "state":
@@ -1353,12 +1511,40 @@ def _scene_from_tables(data: Mapping[str, object]) -> Scene:
     return base.with_params(**flat)
 
 
+def _add_physical(table: Mapping[str, object], flat: dict[str, object]) -> None:
+    """Convert a [physical] table (SI, :func:`chaospound.units.from_physical`) into ``flat``.
+
+    The law, exponent and ground motion it needs come from the other tables; a
+    parameter given both in SI and dimensionless is an error.
+    """
+    from chaospound.units import PhysicalUnitsError, from_physical
+
+    law = _coerce("contact_law", flat.get("contact_law", "hertz"))
+    chi = _coerce("chi", flat.get("chi", DEFAULT_CHI))
+    ground = _coerce("ground", flat.get("ground", "sine"))
+    try:
+        converted, _ = from_physical(table, ground=ground, law=law, chi=chi)
+    except PhysicalUnitsError as exc:
+        raise SceneError(str(exc)) from None
+    for name, value in converted.items():
+        covered = {name, *(n for n, targets in SHORTHANDS.items() if name in targets),
+                   *SHORTHANDS.get(name, ())}
+        clash = sorted(covered & set(flat))
+        if clash:
+            raise SceneError(f"{clash[0]} given in [physical] (SI) and in another table: "
+                             "give it once")
+        flat[name] = value
+
+
 def _toml_document(scene: Scene) -> str:
     """TOML text of a scene; only given forms and non-default Nones are written."""
     tables: dict[str, dict[str, object]] = {
         "excitation": {k: v for k, v in _fields(scene.excitation).items()
-                       if k in ("period_ratio", "ground") or scene.excitation.ground == "record"
-                       or v != getattr(Excitation(), k)},
+                       if k in ("period_ratio", "ground") or v != getattr(Excitation(), k)
+                       or (scene.excitation.ground == "stochastic" and k in STOCHASTIC_FIELDS)
+                       or (scene.excitation.ground in ("record", "stochastic")
+                           and k in ("ground_file", "ground_units", "ground_scale",
+                                     "ground_dt", "length_unit", "tower_period"))},
         "structure": {n: getattr(scene, n) for n in _TABLES["structure"]},
         "tower_A": _tower_table(scene.tower_A),
         "tower_B": _tower_table(scene.tower_B),

@@ -13,6 +13,7 @@ Commands::
     chaospound orbit (--preset NAME | SCENE.toml) [--period K] [--json]
     chaospound continue (--preset NAME | SCENE.toml) --param NAME=START:STOP [--period K] -o B.h5
     chaospound plot BRANCH.h5 [--over SWEEP.h5] [-o FILE.png]
+    chaospound quake (--preset NAME | SCENE.toml) [--record FILE] [--units si] [--ensemble N] ...
 
 Every command that runs a scene takes the same scene options, added by
 :func:`add_scene_options` and turned into a validated
@@ -36,7 +37,8 @@ Layout: one module per command (:mod:`~chaospound.cli.presets` with params,
 :mod:`~chaospound.cli.classify`, :mod:`~chaospound.cli.sweep`,
 :mod:`~chaospound.cli.basins`,
 :mod:`~chaospound.cli.plot`, :mod:`~chaospound.cli.bench`,
-:mod:`~chaospound.cli.orbit` with continue), each with ``add_parser(commands)``
+:mod:`~chaospound.cli.orbit` with continue, :mod:`~chaospound.cli.quake`), each with
+``add_parser(commands)``
 and its ``_cmd_*`` function, registered by :data:`COMMANDS`; the shared helpers
 in :mod:`~chaospound.cli.options` (scene options, argparse types),
 :mod:`~chaospound.cli.output` (exit codes, stderr lines, stdout, tables, JSON),
@@ -62,6 +64,7 @@ from chaospound.cli import (
     orbit,
     plot,
     presets,
+    quake,
     section,
     simulate,
     sweep,
@@ -117,7 +120,7 @@ __all__ = [
 #: the command modules, in the order of ``chaospound --help``: each adds its
 #: subcommands with ``add_parser(commands)``
 COMMANDS = (presets, simulate, section, impact_map, lyapunov, classify, sweep, basins, plot,
-            bench, orbit)
+            bench, orbit, quake)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

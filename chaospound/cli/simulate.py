@@ -54,6 +54,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     )
     out.add_argument("--output", metavar="FILE.json", help="also write the JSON to this file")
     out.add_argument("--overwrite", action="store_true", help="replace an existing --output")
+    out.add_argument("--units", choices=("model", "si"), default="model",
+                     help="also report the impacts in SI (s, m/s, mm, kN) with the conversion "
+                     "table; needs length_unit, tower_period, tower_mass (docs/units.md)")
     out.add_argument("--plot", metavar="FILE.png",
                      help="write the run's figure: time histories of the record window "
                      "(displacements, rotations, clearance with the impacts, contact force) "
@@ -67,6 +70,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     scene = target_from_args(args)
+    units = _si_units(scene) if args.units == "si" else None
     if args.output is not None:
         check_output_path(args.output, overwrite=args.overwrite)
     if args.plot is not None:
@@ -86,14 +90,48 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     document = _simulation_document(sim)
     if _is_system(scene):
         document["system"] = _system_document(scene)
+    if units is not None:
+        from chaospound.units import si_impacts
+
+        document["si"] = {"units": {"time": "s", "velocity": "m/s", "peak_penetration": "mm",
+                                    "peak_force": "kN", "duration": "s"},
+                          "impacts": {k: v.tolist()
+                                      for k, v in si_impacts(sim.impacts, units).items()}}
     if args.output is not None:
         write_json_file(document, args.output, overwrite=args.overwrite)
     if args.json:
         _emit(_json_text(document))
     else:
-        _emit(_simulation_report(sim, args.trajectory, args.output, args.plot,
-                                 scene if _is_system(scene) else None))
+        report = _simulation_report(sim, args.trajectory, args.output, args.plot,
+                                    scene if _is_system(scene) else None)
+        _emit(report if units is None else report + "\n" + _si_blocks(sim, units))
     return EXIT_OK
+
+
+def _si_units(scene):
+    """The scene's physical units for --units si (a one-line error without them)."""
+    from chaospound.units import require_si
+
+    if _is_system(scene):
+        raise CliError("--units si: a user's system has no physical units")
+    return require_si(scene)
+
+
+def _si_blocks(sim: Simulation, units) -> str:
+    """The conversion table and the impact table in SI (``--units si``)."""
+    from chaospound.units import conversion_rows, si_impacts
+
+    blocks = [_table(("quantity", "SI", "model", "rule"), conversion_rows(sim.scene), "llll")]
+    table = si_impacts(sim.impacts, units)
+    if len(sim.impacts):
+        rows = [(str(i + 1), f"{table['time'][i]:.6g}", f"{table['velocity'][i]:.5g}", label,
+                 f"{table['peak_penetration'][i]:.4g}", f"{table['peak_force'][i]:.5g}",
+                 f"{table['duration'][i] * 1e3:.4g}")
+                for i, label in enumerate(sim.impacts.labels)]
+        blocks.append(_table(("#", "time", "velocity", "corner", "peak pen", "peak force",
+                              "duration"), [("", "s", "m/s", "", "mm", "kN", "ms"), *rows],
+                             "rrrlrrr"))
+    return "\n\n".join(blocks) + "\n"
 
 
 def _simulation_save_plot(sim: Simulation, samples_per_cycle: int, path: str,
