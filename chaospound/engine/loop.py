@@ -547,6 +547,13 @@ def store_samples(dense, y, t0, k, period, tau, h, n_samples, traj, n_traj, work
     """
     dt = period / n_samples
     j = int(np.floor(tau / dt)) + 1
+    # tau / dt may round to an integer that j dt does not reach (a step that landed a
+    # rounding error short of a record sample on the grid): the grid decides, not the
+    # quotient, or that sample would be skipped (or stored twice)
+    while j > 1 and (j - 1) * dt > tau:
+        j -= 1
+    while j * dt <= tau:
+        j += 1
     while j < n_samples and j * dt <= tau + h and n_traj < traj.shape[0]:
         theta = min((j * dt - tau) / h, 1.0)
         dense_eval(DENSE_ROWS, dense, y, h, theta, work)
