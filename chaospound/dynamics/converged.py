@@ -67,7 +67,7 @@ from .classify import (
     TRANSIENT_MARGIN,
     Z_FULL_CONFIDENCE,
     Regime,
-    _classification_scene,
+    _classification_system,
     _converged_period,
     _mismatch,
     _phase_from_section,
@@ -202,14 +202,14 @@ class _Classifier:
         self.max_transient = int(max_transient)
         self.newton = newton
         self.record = record
-        self.target, self.rtol, self.atol = _classification_scene(system)
-        self.flow = as_system(self.target)
+        self.target, self.rtol, self.atol = _classification_system(system)
+        self.flow = self.target
         self.tol = TOL_PER_RTOL * self.rtol if tol is None else float(tol)
         if not (math.isfinite(self.tol) and self.tol > 0.0):
             raise ValueError(f"tol = {tol}: must be a finite number > 0")
         if system.scene is not None:
-            self.weights = length_weights(self.target, system.state_names)
-            self.section_phase = self.target.run.phase
+            self.weights = length_weights(self.target.scene, system.state_names)
+            self.section_phase = self.target.scene.run.phase
         else:
             self.weights = np.ones(system.dim)
             self.section_phase = 0.0
