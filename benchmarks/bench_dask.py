@@ -70,7 +70,8 @@ def main() -> None:
     args = parser.parse_args()
 
     scene = load_preset("fig4").with_assignments(["rtol=1e-6"])
-    spec = SweepSpec(axes=(make_axis("period_ratio", f"0.3:2.0#{args.points}", scene),))
+    spec = SweepSpec(axes=(make_axis("period_ratio", f"0.3:2.0#{args.points}", scene),),
+                     classify="paper")
     chunks = sorted({int(c) for c in args.chunks.split(",")})
     result = {
         "scene": "fig4", "rtol": 1e-6, "transient": scene.run.transient,

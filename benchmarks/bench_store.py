@@ -29,7 +29,7 @@ import json, resource, sys, time
 from chaospound.scene import load_preset
 from chaospound.sweep import SweepSpec, parse_axis, run_sweep
 scene = load_preset("fig4").with_params(rtol=1e-6)
-spec = SweepSpec(axes=(parse_axis("period_ratio=0.3:2.0#%(points)d", scene),))
+spec = SweepSpec(axes=(parse_axis("period_ratio=0.3:2.0#%(points)d", scene),), classify="paper")
 start = time.perf_counter()
 run_sweep(scene, spec, sys.argv[1], workers=%(workers)d, progress=False)
 wall = time.perf_counter() - start

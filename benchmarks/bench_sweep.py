@@ -35,7 +35,8 @@ def main() -> None:
     args = parser.parse_args()
 
     scene = load_preset("fig4").with_params(rtol=1e-6)
-    spec = SweepSpec(axes=(parse_axis(f"period_ratio=0.3:2.0#{args.points}", scene),))
+    spec = SweepSpec(axes=(parse_axis(f"period_ratio=0.3:2.0#{args.points}", scene),),
+                     classify="paper")
     warm_up()
     result = {"scene": "fig4", "points": args.points, "rtol": 1e-6, "cycles": "40 + 8",
               "cpus": os.cpu_count(), "runs": {}}

@@ -29,7 +29,7 @@ from chaospound.store import open_sweep
 from chaospound.sweep import SweepSpec, parse_axis, run_sweep
 points, workers, path = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 scene = load_preset("wall").with_params(transient=1, record=2)
-spec = SweepSpec(axes=(parse_axis(f"period_ratio=0.3:2.0#{points}", scene),))
+spec = SweepSpec(axes=(parse_axis(f"period_ratio=0.3:2.0#{points}", scene),), classify="paper")
 start = time.perf_counter()
 run_sweep(scene, spec, path, workers=workers, progress=False)
 wall = time.perf_counter() - start

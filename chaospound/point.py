@@ -31,27 +31,51 @@ def run_task(scene, spec, indices: Sequence[int],
     """Run grid points in order; with continuation each starts from the previous one.
 
     ``scene`` is a Scene (:func:`run_point`) or a custom System
-    (:func:`run_system_point`).
+    (:func:`run_system_point`). With ``spec.classify == "converged"`` and no
+    continuation (the "fresh" branch), a point whose grid predecessor along
+    the last axis ran just before it in this task is warm-started from that
+    point's attractor (:func:`_run_converged`); the sweep cuts such tasks at
+    the blocks of :data:`WARM_BLOCK` points, so that which points are warm
+    does not depend on the workers or the task size.
     """
     results = []
     state = start_state
     runner = run_point if isinstance(scene, Scene) else run_system_point
+    warm_fresh = (spec.classify == "converged" and not continuation
+                  and (isinstance(scene, Scene) or scene.has_gap))
+    inner = spec.shape[-1]
+    previous: PointResult | None = None
     for index in indices:
-        result = runner(scene, spec, int(index), state if continuation else None)
+        index = int(index)
+        if warm_fresh:
+            neighbour = (previous is not None and previous.status == 1
+                         and previous.index == index - 1 and index % inner != 0)
+            result = runner(scene, spec, index, previous.final_state if neighbour else None,
+                            previous=previous if neighbour else None)
+        else:
+            result = runner(scene, spec, index, state if continuation else None)
         results.append(result)
+        previous = result
         if continuation:
             state = result.final_state if result.status == 1 else None
     return results
 
 
 def run_point(scene: Scene, spec, index: int,
-              start_state: np.ndarray | None = None) -> PointResult:
-    """Steady run, classification and optional exponents of one grid point."""
-    return _run(scene, len(scene.initial_vector()), spec, index, start_state)
+              start_state: np.ndarray | None = None,
+              previous: PointResult | None = None) -> PointResult:
+    """Steady run, classification and optional exponents of one grid point.
+
+    ``previous``: the grid neighbour ``start_state`` comes from, on the
+    "fresh" branch of a converged sweep (a warm start checked against a fresh
+    one where the label jumps, :func:`_run_converged`).
+    """
+    return _run(scene, len(scene.initial_vector()), spec, index, start_state, previous)
 
 
 def run_system_point(system, spec, index: int,
-                     start_state: np.ndarray | None = None) -> PointResult:
+                     start_state: np.ndarray | None = None,
+                     previous: PointResult | None = None) -> PointResult:
     """:func:`run_point` for a user's System, swept over its named parameters.
 
     The point is ``system.with_params(**values)``, run for the system's transient
@@ -62,11 +86,11 @@ def run_system_point(system, spec, index: int,
     classify: its points are stored "unresolved", with their sections, exponents
     and statistics.
     """
-    return _run(system, system.dim, spec, index, start_state)
+    return _run(system, system.dim, spec, index, start_state, previous)
 
 
 def _run(target, n_state: int, spec, index: int,
-         start_state: np.ndarray | None) -> PointResult:
+         start_state: np.ndarray | None, previous: PointResult | None = None) -> PointResult:
     """One point of a Scene or a System (see :func:`run_point`, :func:`run_system_point`)."""
     from .dynamics.classify import classify, classify_sequence, length_weights
     from .dynamics.lyapunov import lyapunov_spectrum
@@ -84,6 +108,8 @@ def _run(target, n_state: int, spec, index: int,
         initial = spec.initial_values(index)
         if initial:  # a basin scan: this point's own initial state (and phase)
             start_state, start_phase = _initial_condition(system, initial)
+        if spec.classify == "converged" and (is_scene or point.has_gap):
+            return _run_converged(point, n_exp, spec, index, start_state, previous, started)
         sim = simulate(system, initial_state=start_state,
                        start_at_section=start_state is not None and start_phase is None,
                        start_phase=start_phase)
@@ -148,6 +174,71 @@ def _initial_condition(system, initial: dict[str, float]) -> tuple[np.ndarray, f
         if name != INITIAL_PHASE:
             state[list(names).index(name)] = value
     return state, initial.get(INITIAL_PHASE)
+
+
+def _run_converged(point, n_exp: int, spec, index: int, start_state, previous,
+                   started: float) -> PointResult:
+    """One point classified by :func:`~chaospound.dynamics.converged.classify_converged`.
+
+    The stored record (impacts, sections, final state) is the window the label
+    was read from; an unresolved point's message says why. On the "fresh"
+    branch (``previous`` given) the point starts from its neighbour's
+    attractor; when its label differs from the neighbour's (a bifurcation, or
+    another attractor reached from the warm state) it is classified again
+    from the scene's initial state and the fresh start's result is kept, so
+    that the branch stays the fresh-start branch wherever attractors coexist
+    with different labels. Between chaotic and quasi-periodic (no attractor
+    with an identity to lose; the exponent's statistics decide) there is no
+    second run. On a continuation branch the warm start is the
+    branch (no fresh check).
+    """
+    from .dynamics.converged import classify_converged, regime_key
+    from .dynamics.lyapunov import lyapunov_spectrum
+
+    record = point.run.record if isinstance(point, Scene) else point.record
+    expect_chaos = previous is not None and previous.regime == "chaotic"
+    outcome = classify_converged(point, start_state=start_state, expect_chaos=expect_chaos,
+                                 record=record)
+    if previous is not None:
+        before = (previous.regime, _none_if(previous.period_cycles),
+                  _none_if(previous.impacts_per_period))
+        aperiodic = {"chaotic", "quasi-periodic"}
+        if regime_key(outcome.regime) != before and not (
+                outcome.regime.regime in aperiodic and previous.regime in aperiodic):
+            outcome = classify_converged(point, record=record)
+    regime, record = outcome.regime, outcome.record
+    exps = errs = None
+    max_exp, max_err = regime.max_exponent, regime.max_exponent_error
+    if n_exp:
+        spectrum = lyapunov_spectrum(point, k=n_exp, transient=0,
+                                     initial_state=outcome.final_state,
+                                     cycles=spec.lyapunov_cycles, tangent_transient=10)
+        exps, errs = spectrum.exponents, spectrum.errors
+        max_exp, max_err = float(exps[0]), float(errs[0])
+    imp, stats = record.impacts, record.stats
+    why = regime.evidence.get("why", "") if regime.regime == "unresolved" else ""
+    return PointResult(
+        index=index, status=1, message=why, regime=regime.regime,
+        impacts_per_period=_int_or(regime.impacts_per_period),
+        period_cycles=_int_or(regime.period_cycles),
+        strobe_mismatch=float(regime.strobe_mismatch),
+        zero_one=_float_or(regime.zero_one),
+        max_exponent=_float_or(max_exp), max_exponent_error=_float_or(max_err),
+        transient_used=int(regime.transient_used),
+        corner_sequence=" ".join(regime.corner_sequence),
+        exponents=exps, final_state=outcome.final_state,
+        steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
+        wall_s=time.perf_counter() - started,
+        impacts={"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
+                 "corner": imp.corner.astype(np.int8),
+                 "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
+                 "duration": imp.duration},
+        strobe=record.strobe.state,
+    )
+
+
+def _none_if(value: int) -> int | None:
+    return None if value < 0 else int(value)
 
 
 class _Unclassified:

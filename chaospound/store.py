@@ -33,7 +33,8 @@ Schema of the finished file (format "chaospound-sweep", version 1)::
     /<branch>/                "fresh", or "forward" / "backward" (continuation)
         order                 (N,) grid indices in the branch's visiting order
         status                (N,) int8: 0 pending, 1 done, 2 failed
-        message               (N,) bytes: the failure message of failed points
+        message               (N,) bytes: the failure message of failed points (and why
+                              an unresolved point of a converged sweep is unresolved)
         regime                (N,) int8 code into the attribute REGIMES
         impacts_per_period, period_cycles   (N,) int16, -1 where undefined
         strobe_mismatch, zero_one, max_exponent, max_exponent_error   (N,) float64

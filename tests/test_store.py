@@ -93,20 +93,22 @@ BRANCH_ATTRIBUTES = ("impacts_committed", "strobe_committed", "REGIMES")
 
 @pytest.fixture(scope="module")
 def both_file(tmp_path_factory) -> Path:
-    """fig4, 8 points of T/T_Ax, forward and backward continuation, 2 exponents."""
+    """fig4, 8 points of T/T_Ax, forward and backward continuation, 2 exponents (the
+    paper's window procedure: each point's record is its own simulate run)."""
     path = tmp_path_factory.mktemp("store") / "both.h5"
     spec = sweep_of(FIG4, "period_ratio=0.6:1.3#8", continuation="both", lyapunov=2,
-                    lyapunov_cycles=10)
+                    lyapunov_cycles=10, classify="paper")
     run_sweep(FIG4, spec, path, progress=False)
     return path
 
 
 @pytest.fixture(scope="module")
 def fresh_file(tmp_path_factory) -> Path:
-    """fig4, 6 points from the scene's initial state, no exponents."""
+    """fig4, 6 points from the scene's initial state, no exponents (the window
+    procedure, as both_file)."""
     path = tmp_path_factory.mktemp("store") / "fresh.h5"
-    run_sweep(FIG4, sweep_of(FIG4, "period_ratio=0.5,0.8,1.0,1.2,1.6,1.9"), path,
-              progress=False)
+    run_sweep(FIG4, sweep_of(FIG4, "period_ratio=0.5,0.8,1.0,1.2,1.6,1.9", classify="paper"),
+              path, progress=False)
     return path
 
 

@@ -166,9 +166,10 @@ def test_continuation_shows_the_hysteresis_loop(tmp_path):
     grid = "period_ratio=0.45:1.0:0.025"
     both, fresh = tmp_path / "both.h5", tmp_path / "fresh.h5"
     # 20 + 4 cycles resolve a period to about 1 % (the impacting branch's slow transient)
-    run_sweep(scene, spec_of(scene, grid, continuation="both", window_tol=0.03), both,
+    run_sweep(scene, spec_of(scene, grid, continuation="both", window_tol=0.03,
+                            classify="paper"), both,
               progress=False)
-    run_sweep(scene, spec_of(scene, grid, window_tol=0.03), fresh, progress=False)
+    run_sweep(scene, spec_of(scene, grid, window_tol=0.03, classify="paper"), fresh, progress=False)
     sweep, alone = open_sweep(both), open_sweep(fresh)
     p = sweep.grid["period_ratio"]
     n = p.size
@@ -234,8 +235,9 @@ def test_failed_points_are_recorded_and_the_sweep_goes_on(tmp_path, capsys):
     the unlimited run's, and the summary counts the failures."""
     grid = "period_ratio=0.3:2.0#14"
     unlimited = tmp_path / "unlimited.h5"
+    # the window procedure: one run per point, whose steps the budget bounds
     code, out, err = run(capsys, "sweep", "--preset", "wall", *SHORT, "--param", grid,
-                         "-o", unlimited, "--quiet")
+                         "--classify", "paper", "-o", unlimited, "--quiet")
     assert code == 0, err
     reference = open_sweep(unlimited)
     need = reference.array("steps") + reference.array("rejected")  # the budget counts both
@@ -249,7 +251,8 @@ def test_failed_points_are_recorded_and_the_sweep_goes_on(tmp_path, capsys):
 
     limited = tmp_path / "limited.h5"
     code, out, err = run(capsys, "sweep", "--preset", "wall", *SHORT, "--set",
-                         f"max_steps={budget}", "--param", grid, "-o", limited, "--quiet")
+                         f"max_steps={budget}", "--param", grid, "--classify", "paper",
+                         "-o", limited, "--quiet")
     assert code == 0, err
     assert err == ""
     assert f"failed: {int(should_fail.sum())}" in out
@@ -543,9 +546,10 @@ def test_plot_command_draws_a_regime_map_for_two_parameters(tmp_path, capsys):
 
 
 def sweep_peak(points: int, path: Path) -> int:
-    """tracemalloc peak of a cheap wall sweep (1 + 2 cycles per point)."""
+    """tracemalloc peak of a cheap wall sweep (the paper's window procedure, 1 + 2 cycles
+    per point)."""
     scene = load_preset("wall").with_params(transient=1, record=2)
-    spec = spec_of(scene, f"period_ratio=0.3:2.0#{points}")
+    spec = spec_of(scene, f"period_ratio=0.3:2.0#{points}", classify="paper")
     gc.collect()  # the kernels' first load leaves cyclic garbage: free it before measuring
     tracemalloc.start()
     try:

@@ -107,9 +107,10 @@ def _compare_with_scene(user_file, scene_file, branches):
 
 @pytest.mark.parametrize("name, grid", [("r", "0.6,0.7,0.8,1.1"), ("gap", "0.5,1.0,2.0")])
 def test_user_wall_sweep_is_the_wall_scene_sweep(tmp_path, name, grid):
-    spec = spec_of(USER, f"{name}={grid}")
+    # the paper's window procedure: each point's record is the point's own simulate run
+    spec = spec_of(USER, f"{name}={grid}", classify="paper")
     run_sweep(USER, spec, tmp_path / "user.h5", progress=False)
-    scene_spec = spec_of(SCENE, f"{SCENE_NAME[name]}={grid}")
+    scene_spec = spec_of(SCENE, f"{SCENE_NAME[name]}={grid}", classify="paper")
     run_sweep(SCENE, scene_spec, tmp_path / "scene.h5", progress=False)
     mine, theirs = _compare_with_scene(tmp_path / "user.h5", tmp_path / "scene.h5", ["fresh"])
     regimes = mine.regimes()
@@ -272,7 +273,8 @@ def test_cli_runs_a_system_file_end_to_end(tmp_path, capsys):
     out = tmp_path / "x.h5"
     code, text, err = _cli(capsys, "sweep", f"{file}:system", "--param", "gap=0.5,1.0,2.0",
                            "--set", "transient=30", "--set", "record=4", "-o", out, "--quiet",
-                           "--workers", "2")  # the workers import the file's module by name
+                           "--workers", "2",  # the workers import the file's module by name
+                           "--classify", "paper")
     assert code == 0, err
     assert "3 points computed" in text and "2 worker(s)" in text
     sweep = open_sweep(out)
@@ -300,7 +302,8 @@ def test_cli_runs_a_system_file_end_to_end(tmp_path, capsys):
     # a changed file is another system: resume refuses it in one line
     file.write_text(SYSTEM_FILE.replace('"c": 0.06', '"c": 0.07'))
     code, _, err = _cli(capsys, "sweep", f"{file}:system", "--param", "gap=0.5,1.0,2.0",
-                        "--set", "transient=30", "--set", "record=4", "-o", out, "--resume")
+                        "--set", "transient=30", "--set", "record=4", "-o", out, "--resume",
+                        "--classify", "paper")
     assert code == 2 and "different system (source_sha256" in err and err.count("\n") == 1
 
 

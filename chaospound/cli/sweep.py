@@ -68,7 +68,7 @@ def note_sweep_overrides(args: argparse.Namespace, scene: Scene | None = None) -
 
 
 SWEEP_CONTINUATIONS = ("none", "forward", "backward", "both")  #: as chaospound.sweep.CONTINUATIONS
-SWEEP_CLASSIFY = ("window", "full")  #: as chaospound.sweep.CLASSIFY_MODES
+SWEEP_CLASSIFY = ("converged", "paper", "window", "full")  #: as chaospound.sweep.CLASSIFY_MODES
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -122,9 +122,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     group.add_argument(
         "--classify",
         choices=SWEEP_CLASSIFY,
-        default="window",
-        help="window: the regime from each point's own record window (fast); full: the "
-        "adaptive classifier per point (converged transient, slower)",
+        default="converged",
+        help="converged (default): every point run to its attractor, warm-started along "
+        "the scan, periods confirmed by Newton and Floquet multipliers, exponents until "
+        "the 3-sigma decision; paper (or window): the regime from each point's own record "
+        "window, the paper's transient + record (aperiodic points unresolved without "
+        "--lyapunov); full: the careful adaptive classifier per point (slow)",
     )
     group.add_argument(
         "--window-tol",

@@ -1,0 +1,191 @@
+"""Converged classification (the sweep default) against the careful classifier and
+the other sweep modes.
+
+Two parts:
+
+``speed``: points/s of ``--classify converged``, ``full`` and ``paper`` on the
+same slice of the fig4 scan (T/T_Ax 0.6-1.3, the resonance band, ``--points``
+points), one worker, the modes interleaved in ``--rounds`` rounds so that the
+machine's load hits them alike; the ratios are the result. ``--workers2``
+also times the converged slice with 2 workers against 1 (interleaved).
+Writes results/bench_classify.json.
+
+``agreement``: a random sample of points from the fig4 scan (1000 points over
+T/T_Ax 0.3-2.0), the fig4-translational scan (same grid) and a (T/T_Ax, gap)
+map of fig4 (T/T_Ax 0.3-2.0 x gap 0.5-2.0, 200 x 200); each point is
+classified as the default sweep does (warm-started from its grid predecessor,
+:func:`chaospound.point.run_task` on the two points) and by the careful
+adaptive classifier (:func:`chaospound.dynamics.classify.classify`,
+max_transient 2000, 400 exponent cycles). Writes
+results/classify_agreement.json and .md.
+
+Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds 3
+     PYTHONPATH=. python benchmarks/bench_classify.py agreement --per-set 67
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from chaospound.dynamics.classify import classify
+from chaospound.point import run_task
+from chaospound.scene import load_preset
+from chaospound.sweep import SweepSpec, parse_axis, run_sweep
+
+RESULTS = Path(__file__).resolve().parent.parent / "results"
+MODES = ("converged", "full", "paper")
+
+
+def speed(points: int, rounds: int, workers2: bool) -> dict:
+    scene = load_preset("fig4")
+    axis = parse_axis(f"period_ratio=0.6:1.3#{points}")
+    times: dict[str, list[float]] = {m: [] for m in MODES}
+    if workers2:
+        times["converged-2-workers"] = []
+    labels: dict[str, dict] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        # warm the kernels (compiled once per cache) so no mode pays for compilation
+        run_sweep(scene, SweepSpec(axes=(parse_axis("period_ratio=0.7:0.8#2"),)),
+                  os.path.join(tmp, "warm.h5"), progress=False)
+        for r in range(rounds):
+            for mode in times:
+                spec = SweepSpec(axes=(axis,), classify=mode.split("-")[0])
+                workers = 2 if mode.endswith("workers") else 1
+                t0 = time.perf_counter()
+                summary = run_sweep(scene, spec, os.path.join(tmp, f"{mode}-{r}.h5"),
+                                    workers=workers, progress=False)
+                times[mode].append(time.perf_counter() - t0)
+                labels[mode] = summary.regimes
+                print(f"round {r}: {mode}: {points / times[mode][-1]:.2f} points/s "
+                      f"{summary.regimes}", flush=True)
+    rate = {m: [points / t for t in ts] for m, ts in times.items()}
+    ratio_full = [c / f for c, f in zip(rate["converged"], rate["full"], strict=True)]
+    ratio_paper = [c / p for c, p in zip(rate["converged"], rate["paper"], strict=True)]
+    out = {
+        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+        "slice": f"fig4 period_ratio=0.6:1.3#{points}",
+        "rounds": rounds,
+        "points_per_s": rate,
+        "median_points_per_s": {m: float(np.median(v)) for m, v in rate.items()},
+        "converged_over_full": ratio_full,
+        "converged_over_paper": ratio_paper,
+        "median_converged_over_full": float(np.median(ratio_full)),
+        "regimes_last_round": labels,
+    }
+    if workers2:
+        r2 = [a / b for a, b in zip(rate["converged-2-workers"], rate["converged"],
+                                    strict=True)]
+        out["two_workers_over_one"] = r2
+        out["median_two_workers_over_one"] = float(np.median(r2))
+    return out
+
+
+def _sample_sets(per_set: int, seed: int):
+    rng = np.random.default_rng(seed)
+    one = parse_axis("period_ratio=0.3:2.0#1000")
+    for preset in ("fig4", "fig4-translational"):
+        picks = np.sort(rng.choice(np.arange(1, len(one)), size=per_set, replace=False))
+        yield preset, (one,), picks
+    gap = parse_axis("gap=0.5:2.0#200")
+    pr = parse_axis("period_ratio=0.3:2.0#200")
+    flat = rng.choice(np.arange(200 * 200), size=per_set, replace=False)
+    flat = np.sort(flat[flat % 200 != 0])
+    yield "fig4 (gap, T/T_Ax) map", (gap, pr), flat
+
+
+def agreement(per_set: int, seed: int) -> dict:
+    rows = []
+    for name, axes, picks in _sample_sets(per_set, seed):
+        scene = load_preset(name.split()[0])
+        spec = SweepSpec(axes=axes)
+        for index in picks:
+            index = int(index)
+            t0 = time.perf_counter()
+            result = run_task(scene, spec, [index - 1, index], None, False)[-1]
+            t_conv = time.perf_counter() - t0
+            point = scene.with_params(**spec.point_values(index))
+            t0 = time.perf_counter()
+            careful = classify(point, max_transient=2000, lyapunov_cycles=400)
+            t_care = time.perf_counter() - t0
+            label = result.regime
+            if label in ("periodic", "group-periodic"):
+                label = f"{label} {result.impacts_per_period}-{result.period_cycles}"
+            rows.append({"set": name, "index": index, "values": spec.point_values(index),
+                         "converged": label, "careful": careful.label,
+                         "careful_transient": careful.transient_used,
+                         "converged_s": t_conv, "careful_s": t_care,
+                         "agree": label == careful.label})
+            print(f"{name} {spec.point_values(index)}: converged {label} | careful "
+                  f"{careful.label} ({t_conv:.2f} s, {t_care:.2f} s)", flush=True)
+    agree = sum(r["agree"] for r in rows)
+    impacting = [r for r in rows if r["careful"] != "none"]
+    summary = {
+        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+        "points": len(rows),
+        "agree": agree,
+        "agreement": agree / len(rows),
+        "converged_unresolved": sum(r["converged"] == "unresolved" for r in rows),
+        "careful_unresolved": sum(r["careful"] == "unresolved" for r in rows),
+        "impacting_points": len(impacting),
+        "by_set": {},
+        "rows": rows,
+    }
+    for name in dict.fromkeys(r["set"] for r in rows):
+        sub = [r for r in rows if r["set"] == name]
+        summary["by_set"][name] = {"points": len(sub), "agree": sum(r["agree"] for r in sub)}
+    return summary
+
+
+def _markdown(s: dict) -> str:
+    lines = [
+        "# Converged (sweep default) against the careful classifier",
+        "",
+        f"Command: `PYTHONPATH=. {s['command']}`",
+        "",
+        f"{s['agree']} of {s['points']} points agree ({100 * s['agreement']:.1f} %); "
+        f"unresolved: converged {s['converged_unresolved']}, careful "
+        f"{s['careful_unresolved']}.",
+        "",
+        "| set | points | agree |",
+        "|---|---|---|",
+    ]
+    lines += [f"| {k} | {v['points']} | {v['agree']} |" for k, v in s["by_set"].items()]
+    lines += ["", "Disagreements:", "", "| set | values | converged | careful |",
+              "|---|---|---|---|"]
+    lines += [f"| {r['set']} | {r['values']} | {r['converged']} | {r['careful']} "
+              f"(transient {r['careful_transient']}) |" for r in s["rows"] if not r["agree"]]
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="part", required=True)
+    sp = sub.add_parser("speed")
+    sp.add_argument("--points", type=int, default=50)
+    sp.add_argument("--rounds", type=int, default=3)
+    sp.add_argument("--workers2", action="store_true")
+    ag = sub.add_parser("agreement")
+    ag.add_argument("--per-set", type=int, default=67)
+    ag.add_argument("--seed", type=int, default=17)
+    args = parser.parse_args()
+    RESULTS.mkdir(exist_ok=True)
+    if args.part == "speed":
+        out = speed(args.points, args.rounds, args.workers2)
+        (RESULTS / "bench_classify.json").write_text(json.dumps(out, indent=1) + "\n")
+    else:
+        out = agreement(args.per_set, args.seed)
+        (RESULTS / "classify_agreement.json").write_text(json.dumps(out, indent=1) + "\n")
+        (RESULTS / "classify_agreement.md").write_text(_markdown(out))
+    print(json.dumps({k: v for k, v in out.items() if k != "rows"}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

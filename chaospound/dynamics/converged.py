@@ -1,0 +1,486 @@
+"""Converged classification at scan speed: the default regime of a sweep point.
+
+:func:`classify_converged` names the same regimes as
+:func:`chaospound.dynamics.classify.classify` (rules, tolerances and
+confidences of ``docs/classification.md``), doing less work per point:
+
+1. Start. From a warm state (the neighbouring point's last section along the
+   scan, ``start_state``) or from the scene's initial state at t = 0 (fresh).
+   A warm start runs ``WARM_FIRST`` cycles first, a fresh one ``FRESH_FIRST``.
+2. Sections. Then ``CHUNK`` cycles at a time. After each run the tail of the
+   sections is tested as :func:`classify` rule 3 does (last max(2P, 10)
+   pairs P apart within tol / 10, the smallest P <= max_period).
+3. Newton. As soon as the tail repeats with some period P to within
+   ``NEWTON_TRY`` (a loose 1e-2: the orbit is near, not reached), or rule 3
+   holds, Newton's method (:func:`chaospound.orbits.find_orbit`, the
+   classification's rtol, the variational monodromy) solves P^P(x) = x from
+   the last section. A converged orbit whose Floquet multipliers are all
+   inside the unit circle is the attractor: a record of max(3P, 8) cycles from
+   the orbit's state is classified by
+   :func:`~chaospound.dynamics.classify.classify_sequence` at tol (its
+   smallest period, impacts per period, corner sequence; ``none`` without an
+   impact). Its confidence is the smaller of the window's mismatch confidence
+   (classify's) and ``(1 - max|mu|) / MU_MARGIN`` clipped to [0, 1] (a
+   multiplier near the unit circle: near a bifurcation). An unstable orbit, or
+   no convergence, is noted in the evidence and the runs go on; each period
+   is tried at most twice per point. A tail converged by rule 3 whose Newton
+   run fails (a grazing orbit, where P is not smooth) is classified from its
+   window as :func:`classify` does.
+4. Exponent. When no period is in sight after ``EXPONENT_AFTER`` cycles, the
+   largest exponent (one tangent vector, QR at every section, the tangent
+   aligned over ``TANGENT_ALIGN`` cycles) is accumulated in blocks of
+   ``BLOCK`` cycles: lambda is the mean over all blocks, sigma the standard
+   error of the block means. After at least ``MIN_BLOCKS`` blocks it stops as
+   soon as |lambda| / sigma > ``Z_EARLY`` (a margin above the 3-sigma line
+   for deciding early), or at ``EXPONENT_CAP`` cycles, where the 3-sigma line
+   itself decides. lambda above it: chaotic (the 0-1 test is not needed;
+   confidence as classify's exponent part). lambda below minus it: the motion
+   contracts, a period is near: back to step 2 from the current state.
+5. 0-1 test, only where the exponent cannot decide (|lambda| / sigma <= 3
+   at the cap): ``ZERO_ONE_CYCLES`` sections are recorded; if their tail has
+   settled to a period (rule 3 at tol: a long transient ended) the search
+   goes back to step 3, else
+   :func:`classify_sequence` applies classify's rule 6 (period, then lambda
+   against 3 sigma and K).
+6. Budget. At most ``max_transient`` cycles of sections and exponents;
+   beyond, ``unresolved`` with the reason in ``evidence["why"]``.
+
+Every result carries the evidence behind it (``start``, ``cycles_run``,
+``newton`` attempts with residuals and max|mu|, the exponent's blocks, ...),
+the regime's ``transient_used`` being the cycles run before the record.
+
+Units: exponents per unit normalised time t = tau omega_Ax; periods, budgets
+and transients in excitation cycles.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..scene import Scene
+from .classify import (
+    SIGMAS,
+    TOL_PER_RTOL,
+    TRANSIENT_MARGIN,
+    Z_FULL_CONFIDENCE,
+    Regime,
+    _classification_system,
+    _converged_period,
+    _mismatch,
+    _phase_from_section,
+    _scale,
+    _tail_length,
+    classify_sequence,
+    length_weights,
+)
+from .system import System, advance, as_system
+
+__all__ = ["ConvergedResult", "classify_converged", "regime_key"]
+
+WARM_FIRST = 10  #: cycles run first from a warm start
+FRESH_FIRST = 30  #: cycles run first from the scene's initial state
+CHUNK = 10  #: cycles per further run of sections
+NEWTON_TRY = 1e-2  #: tail mismatch below which Newton is tried at that period
+NEWTON_TOL = 1e-7  #: Newton's relative residual (100 times below the window's tol)
+NEWTON_ITER = 15  #: Newton iterations allowed per attempt
+NEWTON_ATTEMPTS = 2  #: attempts per period and point
+MU_MARGIN = 0.05  #: max|mu| <= 1 - MU_MARGIN: full confidence in the orbit's stability
+EXPONENT_AFTER = 40  #: cycles of sections without a period in sight before the exponent
+TANGENT_ALIGN = 10  #: cycles aligning the tangent vector (discarded)
+BLOCK = 10  #: cycles per block of the exponent
+MIN_BLOCKS = 5  #: blocks before the exponent may decide
+Z_EARLY = 4.0  #: |lambda| / sigma deciding before the cap
+EXPONENT_CAP = 300  #: cycles of exponent at most per stage
+ZERO_ONE_CYCLES = 1000  #: sections recorded for the 0-1 test (as classify)
+MIN_WINDOW = 8  #: default record of a result (a sweep passes the scene's record)
+
+
+@dataclass(frozen=True)
+class ConvergedResult:
+    """A converged classification and the record behind it.
+
+    Attributes
+    ----------
+    regime : Regime
+        The label, confidence, ``transient_used`` and evidence.
+    record : Simulation
+        The record window the label was read from (sections and impacts),
+        starting at a section.
+    final_state : ndarray (n,)
+        The last section of the record: the next point's warm start.
+    """
+
+    regime: Regime
+    record: object
+    final_state: np.ndarray
+
+
+def regime_key(regime: Regime) -> tuple:
+    """What must stay the same between neighbouring points for no jump:
+    the regime, its period and impacts per period (the label)."""
+    return (regime.regime, regime.period_cycles, regime.impacts_per_period)
+
+
+def classify_converged(
+    system_or_scene: System | Scene,
+    *,
+    start_state: np.ndarray | None = None,
+    max_period: int = 16,
+    max_transient: int = 2000,
+    tol: float | None = None,
+    newton: bool = True,
+    expect_chaos: bool = False,
+    record: int = MIN_WINDOW,
+) -> ConvergedResult:
+    """Classify the steady response of a scene or system, converged and fast.
+
+    Parameters
+    ----------
+    system_or_scene : System or Scene
+        What to classify (its solver tightened as classify's rule 1).
+    start_state : ndarray, optional
+        A section state to start from (warm start, e.g. the previous point's
+        ``final_state``); default the system's initial state at t = 0.
+    max_period : int
+        Longest period searched, in cycles.
+    max_transient : int
+        Cycles of sections and exponents at most before the record.
+    tol : float, optional
+        Relative stroboscopic mismatch accepted as a repeat (default
+        ``1e3 * rtol_used``, 1e-5).
+    newton : bool
+        Confirm periods by Newton's method and the Floquet multipliers
+        (False: classify's rule 3 and 4 only, slower to converge).
+    expect_chaos : bool
+        The warm start comes from a chaotic neighbour: the exponent starts
+        after the first ``WARM_FIRST`` cycles instead of ``EXPONENT_AFTER``
+        (a period found in those cycles still wins).
+    record : int
+        Cycles of the record returned with the label (a sweep stores it; a
+        periodic label's window has at least 3P cycles and is read at tol).
+
+    Returns
+    -------
+    ConvergedResult
+
+    Raises
+    ------
+    ValueError
+        Bad arguments, or a system without impacts to classify.
+    chaospound.simulate.SimulationError
+        A run that could not finish.
+    """
+    if int(record) < 1:
+        raise ValueError(f"record = {record}: must be an integer >= 1")
+    return _Classifier(system_or_scene, max_period, max_transient, tol, newton,
+                       int(record)).run(
+        start_state, expect_chaos and start_state is not None)
+
+
+class _Classifier:
+    """The stages of :func:`classify_converged` over one point (see the module docstring)."""
+
+    def __init__(self, system_or_scene, max_period, max_transient, tol, newton,
+                 record: int = MIN_WINDOW) -> None:
+        from ..kernels.params import CUSTOM
+
+        system = as_system(system_or_scene)
+        if system.ground not in ("sine", "none"):
+            raise ValueError(f"ground = {system.ground}: regimes are defined for periodic "
+                             "forcing")
+        if system.scene is None and not (system.model_id == CUSTOM and system.has_gap):
+            raise ValueError(f"system {system.name!r} has no impacts to classify")
+        if int(max_period) < 1:
+            raise ValueError(f"max_period = {max_period}: must be an integer >= 1")
+        if int(max_transient) < FRESH_FIRST:
+            raise ValueError(f"max_transient = {max_transient}: must be >= {FRESH_FIRST}")
+        self.system = system
+        self.max_period = int(max_period)
+        self.max_transient = int(max_transient)
+        self.newton = newton
+        self.record = record
+        self.target, self.rtol, self.atol = _classification_system(system)
+        self.flow = self.target
+        self.tol = TOL_PER_RTOL * self.rtol if tol is None else float(tol)
+        if not (math.isfinite(self.tol) and self.tol > 0.0):
+            raise ValueError(f"tol = {tol}: must be a finite number > 0")
+        if system.scene is not None:
+            self.weights = length_weights(self.target.scene, system.state_names)
+            self.section_phase = self.target.scene.run.phase
+        else:
+            self.weights = np.ones(system.dim)
+            self.section_phase = 0.0
+        self.cycles = 0
+        self.sections: list[np.ndarray] = []
+        self.attempts: dict[int, int] = {}
+        self.evidence: dict = {"rtol": self.rtol, "atol": self.atol, "newton": [],
+                               "exponent_stages": []}
+        self._smap = None
+
+    # ------------------------------------------------------------- driver
+    def run(self, start_state, expect_chaos: bool) -> ConvergedResult:
+        from ..simulate import simulate
+
+        warm = start_state is not None
+        self.evidence["start"] = "warm" if warm else "fresh"
+        if warm:
+            first = simulate(self.target, transient=0, record=WARM_FIRST,
+                             initial_state=np.asarray(start_state, float), start_at_section=True)
+            self.cycles = WARM_FIRST
+        else:
+            first = simulate(self.target, transient=0, record=FRESH_FIRST,
+                             initial_state=self.system.initial_state)
+            self.cycles = FRESH_FIRST
+        self.sections = [first.strobe.state]
+        since_exponent = 0 if warm else FRESH_FIRST - EXPONENT_AFTER // 2
+        if expect_chaos:
+            since_exponent = EXPONENT_AFTER
+        while True:
+            found = self._try_period()
+            if found is not None:
+                return found
+            if self.cycles >= self.max_transient:
+                return self._unresolved("no period and no exponent decision within "
+                                        f"{self.max_transient} cycles")
+            if since_exponent >= EXPONENT_AFTER:
+                decided = self._exponent_stage()
+                if decided is not None:
+                    return decided
+                since_exponent = 0  # contracting: look for the period again
+                continue
+            self._more_sections(CHUNK)
+            since_exponent += CHUNK
+
+    # ------------------------------------------------------------- stages
+    def _last(self) -> np.ndarray:
+        return self.sections[-1][-1]
+
+    def _more_sections(self, cycles: int) -> None:
+        from ..simulate import simulate
+
+        cycles = max(1, min(cycles, self.max_transient - self.cycles))
+        run = simulate(self.target, transient=0, record=cycles, initial_state=self._last(),
+                       start_at_section=True)
+        self.sections.append(run.strobe.state[1:])
+        self.cycles += cycles
+
+    def _tail(self) -> np.ndarray:
+        states = np.concatenate(self.sections)[-_tail_length(self.max_period):]
+        if len(self.sections) > 4:
+            self.sections = [states.copy()]  # keep the tail only
+        return states * self.weights
+
+    def _try_period(self) -> ConvergedResult | None:
+        tail = self._tail()
+        converged = _converged_period(tail, self.max_period, TRANSIENT_MARGIN * self.tol)
+        candidate = converged if converged is not None else _near_period(
+            tail, self.max_period, NEWTON_TRY)
+        if candidate is None:
+            return None
+        if self.newton and self.attempts.get(candidate, 0) < NEWTON_ATTEMPTS:
+            self.attempts[candidate] = self.attempts.get(candidate, 0) + 1
+            confirmed = self._newton(candidate)
+            if confirmed is not None:
+                return confirmed
+        if converged is not None:
+            return self._window_result(self._last(), converged, orbit=None)
+        return None
+
+    def _newton(self, period: int) -> ConvergedResult | None:
+        from ..orbits import OrbitNotFound, find_orbit
+        from ..orbits.maps import StroboscopicMap
+        from ..simulate import SimulationError
+
+        if self._smap is None:
+            self._smap = StroboscopicMap.of(self.target, rtol=self.rtol, atol=self.atol,
+                                            method=None)
+        note = {"period": period, "after_cycles": self.cycles}
+        try:
+            orbit = find_orbit(self._smap, period=period, initial_state=self._last(),
+                               tol=NEWTON_TOL, max_iter=NEWTON_ITER)
+        except (OrbitNotFound, SimulationError, np.linalg.LinAlgError) as exc:
+            note["result"] = str(exc).splitlines()[0][:160]
+            self.evidence["newton"].append(note)
+            return None
+        mu = float(np.max(np.abs(orbit.multipliers)))
+        note.update(residual=orbit.residual, iterations=orbit.iterations, max_multiplier=mu)
+        if not mu < 1.0:
+            note["result"] = "unstable orbit"
+            self.evidence["newton"].append(note)
+            return None
+        note["result"] = "stable orbit"
+        self.evidence["newton"].append(note)
+        return self._window_result(orbit.state, period, orbit=orbit)
+
+    def _window_result(self, state, period: int, orbit) -> ConvergedResult | None:
+        """Record max(3P, record, 3) cycles from ``state`` and classify them at tol."""
+        from ..simulate import simulate
+
+        window = max(3 * period, self.record, 3)
+        record = simulate(self.target, transient=0, record=window, initial_state=state,
+                          start_at_section=True)
+        imp = record.impacts
+        phase = _phase_from_section(imp.time, imp.cycle, record.period, self.section_phase)
+        regime = classify_sequence(record.strobe.state * self.weights, imp.cycle, phase,
+                                   imp.velocity, imp.labels,
+                                   max_period=min(self.max_period, (window - 1) // 2 or 1),
+                                   tol=self.tol, test01=False)
+        if regime.regime in ("unresolved", "quasi-periodic", "chaotic") or (
+                regime.regime == "none" and regime.period_cycles is None):
+            if orbit is not None:
+                self.evidence["newton"][-1]["result"] += ": its window did not repeat"
+            return None
+        found = regime.period_cycles or 1
+        if max(3 * found, self.record, 3) < window:  # a shorter period: the usual record
+            window = max(3 * found, self.record, 3)
+            record = simulate(self.target, transient=0, record=window, initial_state=state,
+                              start_at_section=True)
+        confidence = regime.confidence
+        if orbit is not None:
+            mu = float(np.max(np.abs(orbit.multipliers)))
+            confidence = min(confidence, _clip((1.0 - mu) / MU_MARGIN))
+            self.evidence.update(confirmed_by="newton", orbit_residual=orbit.residual,
+                                 max_multiplier=mu)
+        else:
+            self.evidence.update(confirmed_by="sections")
+        return self._result(regime, record, confidence=confidence, window=window)
+
+    def _exponent_stage(self) -> ConvergedResult | None:
+        """Step 4 (and 5 when the exponent cannot decide)."""
+        n = self.flow.dim
+        augmented = np.zeros(2 * n)
+        augmented[:n] = self._last()
+        augmented[n] = 1.0
+        align = np.zeros((0, 1))
+        augmented, _, _ = advance(self.flow, augmented, TANGENT_ALIGN, tangent="qr",
+                                  tangent_log=align, record_from=TANGENT_ALIGN)
+        period = self.flow.period
+        blocks: list[float] = []
+        ran = TANGENT_ALIGN
+        z = 0.0
+        lam = err = math.nan
+        while ran < EXPONENT_CAP + TANGENT_ALIGN and self.cycles + ran < self.max_transient:
+            log = np.zeros((BLOCK, 1))
+            augmented, _, _ = advance(self.flow, augmented, BLOCK, tangent="qr",
+                                      tangent_log=log, record_from=0)
+            blocks.append(float(log.sum()) / (BLOCK * period))
+            ran += BLOCK
+            if len(blocks) >= MIN_BLOCKS:
+                lam = float(np.mean(blocks))
+                err = float(np.std(blocks, ddof=1) / math.sqrt(len(blocks)))
+                z = lam / max(err, 1e-300)
+                if abs(z) > Z_EARLY:
+                    break
+        self.cycles += ran
+        state = augmented[:n].copy()
+        self.sections = [state[None, :]]
+        stage = {"cycles": ran - TANGENT_ALIGN, "blocks": len(blocks), "exponent": lam,
+                 "error": err, "exponent_over_error": z}
+        self.evidence["exponent_stages"].append(stage)
+        at_cap = abs(z) <= Z_EARLY  # the loop ended at the cap: the 3-sigma rule decides
+        if z > (SIGMAS if at_cap else Z_EARLY):
+            return self._chaotic(state, lam, err, z)
+        if z < -(SIGMAS if at_cap else Z_EARLY):
+            stage["decision"] = "contracting: look for the period"
+            self.sections = [self._record_sections(state)]
+            return None
+        if not blocks or len(blocks) < MIN_BLOCKS:
+            return None  # the budget ran out: the driver says so
+        return self._zero_one(state, lam, err)
+
+    def _record_sections(self, state) -> np.ndarray:
+        from ..simulate import simulate
+
+        run = simulate(self.target, transient=0, record=CHUNK, initial_state=state,
+                       start_at_section=True)
+        self.cycles += CHUNK
+        return run.strobe.state
+
+    def _chaotic(self, state, lam, err, z) -> ConvergedResult:
+        from ..simulate import simulate
+
+        record = simulate(self.target, transient=0, record=max(self.record, 2),
+                          initial_state=state, start_at_section=True)
+        imp = record.impacts
+        if len(imp) == 0:
+            return self._unresolved("positive exponent but no impact in the record", record)
+        states = record.strobe.state * self.weights
+        scale = _scale(states)
+        mismatch = _best_mismatch(states, scale)
+        confidence = _clip((z - SIGMAS) / (Z_FULL_CONFIDENCE - SIGMAS))
+        regime = Regime("chaotic", strobe_mismatch=mismatch, max_exponent=lam,
+                        max_exponent_error=err, confidence=confidence,
+                        evidence={"tol": self.tol, "scale": scale, "exponent_over_error": z})
+        self.evidence["decided_by"] = "exponent"
+        return self._result(regime, record, confidence=confidence, window=self.record)
+
+    def _zero_one(self, state, lam, err) -> ConvergedResult | None:
+        from ..simulate import simulate
+
+        record = simulate(self.target, transient=0, record=ZERO_ONE_CYCLES,
+                          initial_state=state, start_at_section=True)
+        tail = record.strobe.state[-_tail_length(self.max_period):] * self.weights
+        settled = _converged_period(tail, self.max_period, self.tol)
+        if settled is not None:  # a long transient ended within the record: confirm it
+            self.cycles += ZERO_ONE_CYCLES
+            self.sections = [record.strobe.state[-_tail_length(self.max_period):]]
+            self.evidence["exponent_stages"][-1]["decision"] = (
+                f"sections settled to period {settled} during the 0-1 record")
+            return None
+        imp = record.impacts
+        phase = _phase_from_section(imp.time, imp.cycle, record.period, self.section_phase)
+        regime = classify_sequence(record.strobe.state * self.weights, imp.cycle, phase,
+                                   imp.velocity, imp.labels, max_period=self.max_period,
+                                   tol=self.tol, exponent=lam, exponent_error=err,
+                                   test01=True)
+        self.evidence["decided_by"] = "exponent and 0-1 test"
+        if regime.regime == "unresolved":
+            k = regime.zero_one
+            self.evidence["why"] = (
+                f"exponent {lam:+.3g} +- {err:.2g} within {Z_EARLY:g} sigma after "
+                f"{EXPONENT_CAP} cycles and 0-1 test K = "
+                + ("n/a" if k is None else f"{k:.2f}") + " do not agree on a regime")
+        return self._result(regime, record, confidence=regime.confidence,
+                            window=ZERO_ONE_CYCLES)
+
+    # ------------------------------------------------------------- results
+    def _result(self, regime: Regime, record, *, confidence: float,
+                window: int) -> ConvergedResult:
+        evidence = {**regime.evidence, **self.evidence, "window_cycles": window,
+                    "cycles_run": self.cycles, "impacts_in_window": len(record.impacts)}
+        regime = replace(regime, confidence=confidence, transient_used=self.cycles,
+                         evidence=evidence)
+        return ConvergedResult(regime=regime, record=record,
+                               final_state=record.strobe.state[-1].copy())
+
+    def _unresolved(self, why: str, record=None) -> ConvergedResult:
+        from ..simulate import simulate
+
+        if record is None:
+            record = simulate(self.target, transient=0, record=max(self.record, 2),
+                              initial_state=self._last(), start_at_section=True)
+        states = record.strobe.state * self.weights
+        scale = _scale(states)
+        mismatch = _best_mismatch(states, scale)
+        self.evidence["why"] = why
+        regime = Regime("unresolved", strobe_mismatch=mismatch,
+                        evidence={"tol": self.tol, "scale": scale})
+        return self._result(regime, record, confidence=0.0, window=len(states) - 1)
+
+
+def _near_period(tail: np.ndarray, max_period: int, level: float) -> int | None:
+    """Smallest P whose last max(2P, 10) section pairs P apart are within ``level``."""
+    return _converged_period(tail, max_period, level)
+
+
+def _best_mismatch(states: np.ndarray, scale: float) -> float:
+    """The smallest mismatch of a period that fits the record twice."""
+    periods = range(1, max(1, (states.shape[0] - 1) // 2) + 1)
+    return min(_mismatch(states, p, scale) for p in periods)
+
+
+def _clip(value: float) -> float:
+    return float(min(max(value, 0.0), 1.0))
