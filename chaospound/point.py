@@ -153,10 +153,7 @@ def _run(target, n_state: int, spec, index: int,
             exponents=exps, final_state=sim.strobe.state[-1].copy(),
             steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
             wall_s=time.perf_counter() - started,
-            impacts={"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
-                     "corner": imp.corner.astype(np.int8),
-                     "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
-                     "duration": imp.duration},
+            impacts=_impact_columns(imp),
             strobe=sim.strobe.state,
         )
     except (SimulationError, SceneError, ValueError, FloatingPointError, ZeroDivisionError,
@@ -229,10 +226,7 @@ def _run_converged(point, n_exp: int, spec, index: int, start_state, previous,
         exponents=exps, final_state=outcome.final_state,
         steps=stats.steps, rejected=stats.rejected, rhs_evals=stats.rhs_evals,
         wall_s=time.perf_counter() - started,
-        impacts={"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
-                 "corner": imp.corner.astype(np.int8),
-                 "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
-                 "duration": imp.duration},
+        impacts=_impact_columns(imp),
         strobe=record.strobe.state,
     )
 
@@ -268,6 +262,14 @@ def _failed_point(index: int, n_state: int, message: str, started: float) -> Poi
                  "peak_force": empty, "duration": empty},
         strobe=np.zeros((0, n_state)),
     )
+
+
+def _impact_columns(imp) -> dict:
+    """The impact table's columns as a point stores them (corner codes as int8)."""
+    return {"time": imp.time, "phase": imp.phase, "velocity": imp.velocity,
+            "corner": imp.corner.astype(np.int8),
+            "peak_penetration": imp.peak_penetration, "peak_force": imp.peak_force,
+            "duration": imp.duration}
 
 
 def _int_or(value, default: int = -1) -> int:
