@@ -75,15 +75,16 @@ def test_wall_branches_none_and_periodic_1_1_coexist():
     assert len(result.record.impacts) == result.record.record  # one impact a cycle
 
 
-@pytest.mark.parametrize("preset, grid, regime, same_orbit", [
-    ("fig4-translational", "period_ratio=0.45:0.65#5", "periodic", True),
-    # two group-periodic 3-1 orbits coexist at 0.745: the label is unique, the orbit not
-    ("fig4", "period_ratio=0.715:0.745#4", "group-periodic", False),
+@pytest.mark.parametrize("preset, grid, regime", [
+    ("fig4-translational", "period_ratio=0.45:0.65#5", "periodic"),
+    # 0.745, just below the chaotic band, is not such a point: its label there depends
+    # on the path (group-periodic 5-14 or chaotic), and the last bit of any sum decides
+    ("fig4", "period_ratio=0.705:0.735#4", "group-periodic"),
 ])
 def test_warm_starts_change_nothing_where_the_attractor_is_unique(tmp_path, preset, grid,
-                                                                  regime, same_orbit):
+                                                                  regime):
     """A short scan forward, backward and from fresh starts (the default, warm-started
-    in blocks) names every point alike, and ends on the same orbit where it is unique."""
+    in blocks) names every point alike, and ends on the same orbit."""
     scene = load_preset(preset)
     axis = parse_axis(grid, scene)
     run_sweep(scene, SweepSpec(axes=(axis,), continuation="both"), tmp_path / "both.h5",
@@ -92,10 +93,9 @@ def test_warm_starts_change_nothing_where_the_attractor_is_unique(tmp_path, pres
     both, fresh = open_sweep(tmp_path / "both.h5"), open_sweep(tmp_path / "fresh.h5")
     assert labels(both, "forward") == labels(both, "backward") == labels(fresh, "fresh")
     assert set(fresh.regimes()) == {regime}
-    if same_orbit:
-        for branch in ("forward", "backward"):
-            np.testing.assert_allclose(both.array("final_state", branch),
-                                       fresh.array("final_state"), rtol=0, atol=1e-4)
+    for branch in ("forward", "backward"):
+        np.testing.assert_allclose(both.array("final_state", branch),
+                                   fresh.array("final_state"), rtol=0, atol=1e-4)
 
 
 def test_a_budget_too_short_says_why():
