@@ -87,7 +87,7 @@ def _cmd_classify(args: argparse.Namespace) -> int:
         raise CliError(f"--max-period {args.max_period}: must be an integer >= 1")
     if args.plot is not None:
         check_figure_path(args.plot)
-    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
+    _load_kernels(args.quiet, warm=_system_warm(scene), **_engine_of(scene))
     with _Status(f"classifying {scene.name}", quiet=args.quiet) as status:
         regime = classify(
             scene,

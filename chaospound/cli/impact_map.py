@@ -53,7 +53,7 @@ def _cmd_impact_map(args: argparse.Namespace) -> int:
                        "(custom_system(rhs, jacobian, gap, ...))")
     if args.plot is not None:
         check_figure_path(args.plot)
-    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
+    _load_kernels(args.quiet, warm=_system_warm(scene), **_engine_of(scene))
     transient, record = ((system.transient, system.record) if system is not None
                          else (scene.run.transient, scene.run.record))
     cycles = f"{transient} transient + {record} recorded cycles"

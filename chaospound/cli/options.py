@@ -266,11 +266,13 @@ def _float_pair(text: str) -> tuple[float, float]:
     return pair
 
 
-def _engine_of(scene):
-    """The engine a scene's (or a System's) runs use (its composition's)."""
+def _engine_of(scene) -> dict:
+    """The engine a scene's (or a System's) runs use (its composition's) and the
+    packed vector it runs on: ``_load_kernels``'s ``engine`` and ``params``."""
     from chaospound.dynamics.system import System
 
-    return (scene if isinstance(scene, System) else System.from_scene(scene)).engine()
+    system = scene if isinstance(scene, System) else System.from_scene(scene)
+    return {"engine": system.engine(), "params": system.params}
 
 
 def _system_warm(target):

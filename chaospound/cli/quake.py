@@ -113,7 +113,7 @@ def _cmd_quake(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_figure_path(args.plot)
     tail = args.tail / units.time if units is not None else 0.0
-    _load_kernels(args.quiet, engine=_engine_of(scene))
+    _load_kernels(args.quiet, **_engine_of(scene))
     with _Status(f"running {scene.name} under its ground motion", quiet=args.quiet) as status:
         run = quake(scene, tail=tail, samples_per_cycle=args.samples, lyapunov=False)
         if not args.no_lyapunov:

@@ -63,7 +63,7 @@ def _cmd_section(args: argparse.Namespace) -> int:
     system = scene if _is_system(scene) else None
     if args.plot is not None:
         check_figure_path(args.plot)
-    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
+    _load_kernels(args.quiet, warm=_system_warm(scene), **_engine_of(scene))
     transient = system.transient if system is not None else scene.run.transient
     phase = 0.0 if system is not None else scene.run.phase  # a system's: t = k T
     with _Status(f"section of {scene.name}: {transient} transient + {args.cycles} "

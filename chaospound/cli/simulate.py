@@ -77,7 +77,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         check_figure_path(args.plot)
         if args.output is not None and os.path.abspath(args.plot) == os.path.abspath(args.output):
             raise CliError(f"--plot {_path(args.plot)} is the --output file")
-    _load_kernels(args.quiet, warm=_system_warm(scene), engine=_engine_of(scene))
+    _load_kernels(args.quiet, warm=_system_warm(scene), **_engine_of(scene))
     transient, record = ((scene.transient, scene.record) if _is_system(scene)
                          else (scene.run.transient, scene.run.record))
     cycles = f"{transient} transient + {record} recorded cycles"

@@ -79,13 +79,13 @@ class _Status:
             pass
 
 
-def _load_kernels(quiet: bool, warm=None, engine=None) -> None:
+def _load_kernels(quiet: bool, warm=None, engine=None, params=None) -> None:
     """Load the engine of the work before the work, outside its timing: from numba's
     disk cache (well under a second), or by compiling it (the first run of a
     composition after installing or editing, about :data:`COMPILE_ESTIMATE_S` s),
     which is announced at once on a terminal. ``engine`` is the engine the work runs
     (default: the default scene's); ``warm`` the call that loads it (default: one
-    tiny cycle of ``engine``)."""
+    tiny step of ``engine`` on ``params``, the packed vector of the work's System)."""
     from chaospound.simulate import kernels_cached, warm_up
 
     if engine is None:
@@ -95,7 +95,7 @@ def _load_kernels(quiet: bool, warm=None, engine=None) -> None:
         engine = engine_for(DEFAULT_COMPOSITION)
     if warm is None:
         def warm() -> None:
-            warm_up(engine)
+            warm_up(engine, params)
     cached = kernels_cached(engine.composition)
     if cached is False:
         text, delay = f"compiling kernels, first run only, about {COMPILE_ESTIMATE_S} s", 0.0
