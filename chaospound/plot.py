@@ -113,6 +113,8 @@ PARAMETER_LABELS = {
     "ground_sh_b": r"Saragoni-Hart $b$",
     "ground_sh_c": r"Saragoni-Hart $c$ [1/s]",
     "ground_components": "ground components",
+    "ground_y_ratio": r"$u_{gy}/u_{gx}$ (y amplitude ratio)",
+    "ground_y_phase": r"$\varphi_y$ [rad] (y phase lead)",
     "rtol": "relative tolerance rtol",
     "atol": "absolute tolerance atol",
     "phase": r"section phase $t_0/T$",

@@ -118,6 +118,8 @@ STOCHASTIC_FIELDS = ("ground_seed", "ground_duration", "ground_omega_g", "ground
                      "ground_omega_f", "ground_zeta_f", "ground_intensity", "ground_pga",
                      "ground_envelope", "ground_t_rise", "ground_t_plateau", "ground_decay",
                      "ground_sh_b", "ground_sh_c", "ground_components")
+#: the sine's y component (u_gy = y_ratio sin(t/r + y_phase)): docs/ground_motions.md 2
+SINE_Y_FIELDS = ("ground_y_ratio", "ground_y_phase")
 STANDARD_GRAVITY = 9.80665  #: g [m/s^2]
 DEFAULT_STOCHASTIC_DT = 0.01  #: sample interval [s] of a stochastic motion
 RECORD_UNITS = ("auto", "g", "m/s^2", "cm/s^2")  #: accelerogram units ("auto": the file's, else g)
@@ -239,6 +241,9 @@ _GLOBAL_SPECS: dict[str, _Spec] = {
     "ground_sh_c": _pos("stochastic, saragoni-hart: rate c of t^b exp(-c t) [1/s]"),
     "ground_components": _Spec("int", "stochastic: 1 (x) or 2 (independent x and y) "
                                "components", low=1.0, high=3.0),
+    "ground_y_ratio": _real("sine: amplitude of the y component over the x one, "
+                            "u_gy = y_ratio sin(t/r + y_phase) (Gong & Hao 2005; 0: x only)"),
+    "ground_y_phase": _real("sine: phase lead of the y component over the x one [rad]"),
     "length_unit": _pos("A_g in metres: the model's length unit, for a record", True),
     "tower_period": _pos("T_Ax in seconds: tower A's x period, for a record", True),
     "tower_mass": _pos("m_A in kilograms: tower A's mass, the force unit of --units si", True),
@@ -303,7 +308,8 @@ _SUFFIXES = ("_A", "_B")
 _TARGET: dict[str, tuple[str, str]] = {
     **{n: ("excitation", n) for n in ("period_ratio", "ground", "ground_file", "ground_units",
                                       "ground_scale", "ground_dt", "length_unit",
-                                      "tower_period", "tower_mass", *STOCHASTIC_FIELDS)},
+                                      "tower_period", "tower_mass", *STOCHASTIC_FIELDS,
+                                      *SINE_Y_FIELDS)},
     **{
         n: ("scene", n)
         for n in ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping")
@@ -669,6 +675,11 @@ class Excitation:
         [1/s]; "saragoni-hart": b, c [1/s]; "none") and 1 or 2 components.
         ``ground_dt`` [s] is the sample interval (default 0.01 s), ``ground_scale``
         a factor on the accelerations.
+    ground_y_ratio, ground_y_phase : float
+        The sine's y component ``u_gy = y_ratio sin(t / r + y_phase)`` (the
+        bi-directional harmonic input of Gong & Hao 2005): its amplitude over
+        the x one and its phase lead [rad]. 0 (the default): x only. Only with
+        ``ground = "sine"``.
     """
 
     period_ratio: float = DEFAULT_PERIOD_RATIO
@@ -695,9 +706,15 @@ class Excitation:
     ground_sh_b: float = 2.0
     ground_sh_c: float = 0.5
     ground_components: int = 1
+    ground_y_ratio: float = 0.0
+    ground_y_phase: float = 0.0
 
     def __post_init__(self) -> None:
         _check_fields(self, _GLOBAL_SPECS)
+        if self.ground_y_ratio != 0.0 and self.ground != "sine":
+            raise SceneError(f"ground_y_ratio = {self.ground_y_ratio:g}: a y component of "
+                             f"the sine only, not of ground = {self.ground} (a record's or a "
+                             "stochastic motion's second component is its own)")
         if self.ground == "record":
             missing = [n for n in ("ground_file", "length_unit", "tower_period")
                        if getattr(self, n) is None]
@@ -773,12 +790,39 @@ class Excitation:
         return record.block_from_samples(t, a_x * factor, a_y)
 
     def ground_block(self) -> np.ndarray | None:
-        """The block a record or a stochastic motion appends to the packed vector."""
+        """The block a record, a stochastic motion or a sine with a y component
+        appends to the packed vector (None: the x-only sine's block is the scene's
+        ``P_PERIOD_RATIO`` slot, and "none" has none)."""
         if self.ground == "record":
             return self.record_block()
         if self.ground == "stochastic":
             return self.stochastic_block()
+        if self.ground == "sine" and self.ground_y_ratio != 0.0:
+            from chaospound.physics.ground import sine
+
+            return sine.block({"period_ratio": self.period_ratio, "y_ratio": self.ground_y_ratio,
+                               "y_phase": self.ground_y_phase})
         return None
+
+    @property
+    def has_y(self) -> bool:
+        """Whether the motion has a y component, which then drives the towers' Y.
+
+        The sine with ``ground_y_ratio != 0``, a stochastic motion with
+        ``ground_components = 2``, a record whose file holds two components
+        (read once per Excitation).
+        """
+        if self.ground == "sine":
+            return self.ground_y_ratio != 0.0
+        if self.ground == "stochastic":
+            return self.ground_components == 2
+        if self.ground == "record":
+            known = self.__dict__.get("_record_components")
+            if known is None:
+                known = int(self.record_block()[1])
+                object.__setattr__(self, "_record_components", known)
+            return known == 2
+        return False
 
     def record_block(self) -> np.ndarray:
         """The block of a recorded ground motion (its samples in model units)."""
@@ -1286,6 +1330,9 @@ class Scene:
                 reasons.append(f"ecc_y_{label} = {e_y:g} != 0")
         if "B" in towers and self.offset_y != 0.0:
             reasons.append(f"offset_y = {self.offset_y:g} != 0")
+        if self.excitation.has_y:
+            reasons.append("the ground motion has a y component ("
+                           + _y_component_text(self.excitation) + "), which drives Y")
         state = self.initial_state or (0.0,) * 12
         for label, index in (("A", _LATERAL_A), ("B", _LATERAL_B)):
             if label in towers and any(state[i] != 0.0 for i in index):
@@ -1314,6 +1361,15 @@ class Scene:
                     f"{label} = {name!r}: not exact for this scene ({'; '.join(reasons)}); "
                     f"use {bigger!r} or 'auto'"
                 )
+
+
+def _y_component_text(excitation: Excitation) -> str:
+    """What gives a ground motion its y component, for a reduction's refusal."""
+    if excitation.ground == "sine":
+        return f"ground_y_ratio = {excitation.ground_y_ratio:g}"
+    if excitation.ground == "stochastic":
+        return "ground_components = 2"
+    return f"two components in ground_file {excitation.ground_file}"
 
 
 def _is_model_id(model_id: object) -> bool:
@@ -1445,7 +1501,8 @@ def _updated(component: object, label: str, values: Mapping[str, object]) -> obj
 # ================================================================== TOML
 _TABLES: dict[str, tuple[str, ...]] = {
     "excitation": ("period_ratio", "ground", "ground_file", "ground_units", "ground_scale",
-                   "ground_dt", "length_unit", "tower_period", "tower_mass", *STOCHASTIC_FIELDS),
+                   "ground_dt", "length_unit", "tower_period", "tower_mass", *STOCHASTIC_FIELDS,
+                   *SINE_Y_FIELDS),
     "ground": (),  # [ground] motion = "...", file = "...": the ground_* names without prefix
     "structure": ("freq_ratio", "mass_ratio", "gap", "offset_y", "opponent", "torsion_damping"),
     "tower_A": tuple(_TOWER_SPECS),

@@ -40,8 +40,13 @@ def _solver_text(solver) -> str:
 
 def _scene_rows(scene, model: str, period: float) -> list[tuple[str, str]]:
     """The rows every report of a scene starts with: scene, model, period ratio."""
-    return [("scene", _scene_title(scene)), ("model", model),
+    rows = [("scene", _scene_title(scene)), ("model", model),
             ("period ratio", f"T/T_Ax = {scene.excitation.period_ratio:g} (T = {period:.6g})")]
+    ex = scene.excitation
+    if ex.ground == "sine" and ex.ground_y_ratio != 0.0:  # the bi-directional sine
+        rows.append(("ground y", f"u_gy = {ex.ground_y_ratio:g} sin(t/r + "
+                                 f"{ex.ground_y_phase:g})"))
+    return rows
 
 
 def _emit_report(blocks: list[str], tail: list[tuple[str, str]], plot: str | None) -> int:

@@ -84,6 +84,9 @@ class System:
         The ground motion (a key of :data:`chaospound.engine.compose.GROUNDS`).
     law : str
         The contact law (a key of :data:`chaospound.engine.compose.LAWS`).
+    ground_y : bool
+        The ground's y component drives the towers' Y (a scene's
+        ``Excitation.has_y``; the composition's ``ground_y``).
     user : UserFunctions or None
         A custom system's functions.
     record : int
@@ -116,6 +119,7 @@ class System:
     n_states: int | None = None
     ground: str = "sine"
     law: str = "hertz"
+    ground_y: bool = False
     user: UserFunctions | None = field(default=None, compare=False, repr=False)
     record: int = 8
     names: tuple[str, ...] = ()
@@ -146,6 +150,7 @@ class System:
             scene=scene,
             ground=scene.excitation.ground,
             law=scene.contact.contact_law,
+            ground_y=scene.excitation.has_y,
         )
 
     @property
@@ -157,7 +162,7 @@ class System:
         """What the engine integrates: model, contact law, ground motion, method."""
         return Composition(model="user" if self.model_id == CUSTOM else self.model_name,
                            law=self.law, ground=self.ground, method=self.method,
-                           user=self.user)
+                           user=self.user, ground_y=self.ground_y)
 
     def engine(self, tangent: str = "none") -> Engine:
         """The compiled engine of this system; ``tangent`` "qr" or "propagator" carries

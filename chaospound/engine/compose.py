@@ -93,7 +93,10 @@ MEMORY_FUNCTIONS = ("onset_sensitivity", "point_memory_force", "line_memory_forc
 #: without them: chaospound.physics.models.no_memory, and check_tangent refuses)
 MODEL_MEMORY_FUNCTIONS = ("model_memory_linearize", "model_memory_jvp", "model_onset_variation",
                           "model_onset_accel")
-GROUND_FUNCTIONS = ("at", "anchor", "shifted", "at_anchor", "next_kink", "acceleration")
+GROUND_FUNCTIONS = ("at", "at_y", "anchor", "shifted", "at_anchor", "next_kink",
+                    "acceleration")
+#: the models with a Y degree of freedom, the only ones a ground's y component drives
+Y_MODELS = ("towers", "tower-wall")
 TANGENTS = ("none", "qr", "propagator")  #: what may ride along the state
 _PACKAGE = Path(__file__).resolve().parent.parent
 
@@ -152,6 +155,11 @@ class Composition:
         a monodromy matrix: periodic orbits and their Floquet multipliers).
     user : UserFunctions or None
         A user system's functions (model "user").
+    ground_y : bool
+        The ground's y component drives the towers' Y equations (a model of
+        :data:`Y_MODELS`, a ground other than "none"): bound as the constant
+        ``GROUND_Y``, so a composition without it compiles the x-only equations
+        and pays nothing (docs/ground_motions.md section 2).
     """
 
     model: str
@@ -160,6 +168,7 @@ class Composition:
     method: str = "dopri5"
     tangent: str = "none"
     user: UserFunctions | None = None
+    ground_y: bool = False
 
     def __post_init__(self) -> None:
         for label, value, known in (("model", self.model, MODELS), ("law", self.law, LAWS),
@@ -171,21 +180,30 @@ class Composition:
             raise ValueError(f"tangent = {self.tangent!r}: need one of {', '.join(TANGENTS)}")
         if (self.model == "user") != (self.user is not None):
             raise ValueError("a user model needs its functions, and only a user model has them")
+        if self.ground_y and self.model not in Y_MODELS:
+            raise ValueError(f"ground_y on the {self.model} model: only {', '.join(Y_MODELS)} "
+                             "have a Y degree of freedom for a y ground motion to drive")
+        if self.ground_y and self.ground == "none":
+            raise ValueError("ground_y with ground 'none': there is no y component")
 
     def canonical(self) -> str:
         """The composition as text (part of the key)."""
         text = (f"model={self.model};law={self.law};ground={self.ground};"
                 f"method={self.method};tangent={self.tangent}")
+        if self.ground_y:
+            text += ";ground_y"
         if self.user is not None:
             text += f";user={self.user.canonical()}"
         return text
 
     def with_tangent(self, tangent: str = "qr") -> Composition:
-        return Composition(self.model, self.law, self.ground, self.method, tangent, self.user)
+        return Composition(self.model, self.law, self.ground, self.method, tangent, self.user,
+                           self.ground_y)
 
     def label(self) -> str:
-        """Short human label: ``towers/hertz/sine/dopri5``."""
-        parts = [self.model, self.law, self.ground, self.method]
+        """Short human label: ``towers/hertz/sine/dopri5`` (``sine+y`` with ground_y)."""
+        parts = [self.model, self.law, self.ground + ("+y" if self.ground_y else ""),
+                 self.method]
         if self.tangent != "none":
             parts.append(self.tangent)
         return "/".join(parts)
@@ -258,6 +276,7 @@ def _bindings(c: Composition) -> str:
         f"LAW_JUMPS = {bool(law_module.JUMPS)}",
         f"LAW_DXI = {law_base(c.law) + getattr(law_module, 'TANGENT_SLOT', 0)}",
         f"GROUND = {ground_base(c)}",
+        f"GROUND_Y = {c.ground_y}",
         f"GROUND_PERIODIC = {c.ground in ('sine', 'none')}",
         f"GROUND_KINKS = {bool(importlib.import_module(ground).KINKS)}",
         f"TANGENT = {c.tangent != 'none'}",
@@ -315,11 +334,13 @@ def law_block_size(law: str) -> int:
 def ground_base(c: Composition) -> int:
     """First slot of the ground motion's block.
 
-    The sine's block ``(period_ratio, ...)`` is the scene's ``P_PERIOD_RATIO``;
-    a record's or a stochastic motion's block (its samples) follows the law's
-    block, after ``N_PARAMS`` (:meth:`chaospound.scene.Scene.pack`).
+    The x-only sine's block ``(period_ratio)`` is the scene's ``P_PERIOD_RATIO``;
+    a record's or a stochastic motion's block (its samples), and the whole
+    sine block ``(period_ratio, y_ratio, y_phase)`` of a composition with
+    ``ground_y``, follow the law's block, after ``N_PARAMS``
+    (:meth:`chaospound.scene.Scene.pack`).
     """
-    if c.ground in ("sine", "none"):
+    if c.ground == "none" or (c.ground == "sine" and not c.ground_y):
         return P_PERIOD_RATIO
     return N_PARAMS + law_block_size(c.law)
 

@@ -23,6 +23,7 @@ LAW_DXI = 0  #: slot of the first tangent vector's memory sensitivity d xi (laws
 GROUND = 0  #: first slot of the ground motion's block
 GROUND_PERIODIC = True  #: the motion is periodic with the section interval (the sine)
 GROUND_KINKS = False  #: the motion's acceleration has kinks at samples (a record)
+GROUND_Y = False  #: the ground's y component drives the towers' Y (models with Y only)
 N_BASE = 0  #: state dimension of the model (the tangent vectors follow it)
 N_ENDS = 0  #: contact ends the events watch: 2 (line contact), 1 (point), 0 (none)
 TANGENT = False  #: integrate tangent vectors after the state (QR at sections)
@@ -42,7 +43,7 @@ law_onset_sensitivity = law_point_memory_force = law_line_memory_force = _unboun
 law_on_sides = _unbound
 # ---- ground motion
 ground_at = ground_anchor = ground_shifted = ground_at_anchor = ground_next_kink = _unbound
-ground_acceleration = _unbound
+ground_acceleration = ground_at_y = _unbound
 # ---- model
 model_rhs = model_ends = model_rate = model_forces = model_force_rate = _unbound
 model_potential = model_energy = model_trace = model_linearize = model_jvp = _unbound

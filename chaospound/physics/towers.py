@@ -2,7 +2,8 @@
 
 Shared by the models that contain towers (:mod:`chaospound.physics.models`);
 nothing here knows the contact law or the ground motion: the contact enters as
-generalised forces, the ground as ``(u_g, u_g')``.
+generalised forces, the ground as ``(u_g, u_g')`` (and ``(u_gy, u_gy')`` along y,
+:func:`tower_accel_xy`).
 """
 
 from chaospound.kernels.jit import inline, kernel
@@ -37,6 +38,35 @@ def tower_accel(p, base, x, vx, yy, vy, th, vth, ug, vg, qx, qy, qth, out, off):
     out[off + 5] = (
         -p[base + T_CT] * vth
         - p[base + T_KTH] * (ey * xr - ex * yy)
+        - p[base + T_OMT2] * th
+        + p[base + T_MU_RHO2] * qth
+    )
+
+
+@inline
+def tower_accel_xy(p, base, x, vx, yy, vy, th, vth, ug, vg, ugy, vgy, qx, qy, qth, out, off):
+    """:func:`tower_accel` under a bi-directional ground motion: ``(u_gy, u_gy')``
+    along y too (docs/model.md section 5).
+
+    Y relative to the ground replaces Y in the Y equation and in the torsion's
+    stiffness coupling, and the y damping acts on ``Y' - u_gy'``. A separate
+    function, not :func:`tower_accel` with zeros, so that a composition
+    without a y component compiles exactly the x-only arithmetic.
+    """
+    om2 = p[base + T_OM2]
+    mu = p[base + T_MU]
+    ex = p[base + T_EX]
+    ey = p[base + T_EY]
+    xr = x - ug
+    yr = yy - ugy
+    out[off] = vx
+    out[off + 1] = -p[base + T_CX] * (vx - vg) - om2 * (xr + ey * th) + mu * qx
+    out[off + 2] = vy
+    out[off + 3] = -p[base + T_CY] * (vy - vgy) - om2 * (yr - ex * th) + mu * qy
+    out[off + 4] = vth
+    out[off + 5] = (
+        -p[base + T_CT] * vth
+        - p[base + T_KTH] * (ey * xr - ex * yr)
         - p[base + T_OMT2] * th
         + p[base + T_MU_RHO2] * qth
     )

@@ -3,14 +3,21 @@
 docs/model.md section 9 (the reduction of the towers model to one tower). State
 ``(X_A, X_A', Y_A, Y_A', th_A, th_A')``. A template, as
 :mod:`chaospound.physics.models.towers`; the wall moves with the ground.
+
+A ground motion's y component (``GROUND_Y``) drives the tower's Y equation
+only: the wall is taken as long in y, so sliding along its own face it changes
+neither the penetration nor the contact line (no friction is modelled), and the
+contact terms are those of the x-only model (docs/ground_motions.md section 2).
 """
 
 from chaospound.kernels.free import (
     GROUND,
+    GROUND_Y,
     LAW,
     LAW_DISSIPATIVE,
     ground_acceleration,
     ground_at,
+    ground_at_y,
     law_line_force,
     law_line_force_rate,
     law_line_gradient,
@@ -31,7 +38,7 @@ from chaospound.kernels.params import (
     TOWER_A,
 )
 from chaospound.physics.corners import CORNER_A_MINUS, CORNER_A_PLUS, CORNER_FACE, FACE_TOL
-from chaospound.physics.towers import structural_jvp, tower_accel, tower_energy
+from chaospound.physics.towers import structural_jvp, tower_accel, tower_accel_xy, tower_energy
 
 # ==== template ====
 N_BASE = 6
@@ -47,8 +54,13 @@ def model_rhs(t, y, p, ug, vg, out):
     d_c = y[0] - ug - p[P_GAP] - th_a * (y_c - y_ca)
     rate_c, rate_slope = _rates(t, y, p)
     force, moment, _, _ = law_line_force(p, LAW, d_c, -th_a, rate_c, rate_slope, p[P_HALF_L])
-    tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
-                -force, -th_a * force, moment - (y_ca - y_c) * force, out, 0)
+    if GROUND_Y:  # a constant of the composition: the other branch compiles away
+        ugy, vgy = ground_at_y(t, p, GROUND)
+        tower_accel_xy(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg, ugy, vgy,
+                       -force, -th_a * force, moment - (y_ca - y_c) * force, out, 0)
+    else:
+        tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
+                    -force, -th_a * force, moment - (y_ca - y_c) * force, out, 0)
 
 
 @inline

@@ -27,8 +27,11 @@ same for M), with ``rate_c = X_A' - X_B' + th_A' arm_A - th_B' arm_B + th_A Y_A'
 """
 
 from chaospound.kernels.free import (
+    GROUND,
+    GROUND_Y,
     LAW,
     LAW_DISSIPATIVE,
+    ground_at_y,
     law_line_force,
     law_line_force_rate,
     law_line_gradient,
@@ -61,7 +64,7 @@ from chaospound.physics.corners import (
     CORNER_FACE,
     FACE_TOL,
 )
-from chaospound.physics.towers import structural_jvp, tower_accel, tower_energy
+from chaospound.physics.towers import structural_jvp, tower_accel, tower_accel_xy, tower_energy
 
 # ==== template ====
 N_BASE = 12
@@ -70,7 +73,12 @@ N_ENDS = 2
 
 @inline
 def model_rhs(t, y, p, ug, vg, out):
-    """Time derivative of the state (docs/model.md section 5), into ``out``."""
+    """Time derivative of the state (docs/model.md section 5), into ``out``.
+
+    ``(ug, vg)`` is the ground's x motion at t; a composition with ``GROUND_Y``
+    (a constant: the other branch compiles away) adds its y motion
+    ``ground_at_y``, which drives both towers' Y equations.
+    """
     th_a = y[4]
     th_b = y[10]
     y_c = p[P_Y_C]
@@ -82,10 +90,17 @@ def model_rhs(t, y, p, ug, vg, out):
                                          p[P_HALF_L])
     q_tha = moment - (y_ca - y_c) * force
     q_thb = -(moment - (y_cb - y_c) * force)
-    tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
-                -force, -th_a * force, q_tha, out, 0)
-    tower_accel(p, TOWER_B, y[6], y[7], y[8], y[9], th_b, y[11], ug, vg,
-                force, th_b * force, q_thb, out, 6)
+    if GROUND_Y:
+        ugy, vgy = ground_at_y(t, p, GROUND)
+        tower_accel_xy(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg, ugy, vgy,
+                       -force, -th_a * force, q_tha, out, 0)
+        tower_accel_xy(p, TOWER_B, y[6], y[7], y[8], y[9], th_b, y[11], ug, vg, ugy, vgy,
+                       force, th_b * force, q_thb, out, 6)
+    else:
+        tower_accel(p, TOWER_A, y[0], y[1], y[2], y[3], th_a, y[5], ug, vg,
+                    -force, -th_a * force, q_tha, out, 0)
+        tower_accel(p, TOWER_B, y[6], y[7], y[8], y[9], th_b, y[11], ug, vg,
+                    force, th_b * force, q_thb, out, 6)
 
 
 @inline
