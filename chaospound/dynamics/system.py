@@ -768,7 +768,7 @@ def warm_up(engine: Engine | None = None, params: np.ndarray | None = None) -> N
     default scene's (fig3a's composition). ``params`` is the packed vector of a
     System of that composition (a copy is run: the laws' memory slots are
     written at onsets); without it a placeholder of the fixed layout serves the
-    compositions that read nothing beyond it (Hertz under a sine or no ground),
+    compositions that read nothing beyond it (Hertz under an x-only sine or no ground),
     and the others compile at their first real run: a composition with a law
     block or a record must never run on a vector that lacks them (the kernels
     do not check bounds).
@@ -784,7 +784,7 @@ def warm_up(engine: Engine | None = None, params: np.ndarray | None = None) -> N
     y = np.zeros(n)
     if params is not None:
         p = np.array(params, dtype=np.float64)
-    elif c.law == "hertz" and c.ground in ("sine", "none"):
+    elif c.law == "hertz" and c.ground in ("sine", "none") and not c.ground_y:
         p = np.zeros(N_PARAMS)
         p[P_PERIOD] = 1.0
         p[P_PERIOD_RATIO] = 1.0
