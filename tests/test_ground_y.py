@@ -17,11 +17,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from chaospound import load_preset, simulate
+from chaospound import load_preset
 from chaospound.dynamics.system import System
 from chaospound.engine.compose import Composition
 from chaospound.physics.ground import sine
 from chaospound.scene import Scene, SceneError
+from chaospound.simulate import simulate
 
 FAR = 1e6  #: a gap no motion here closes: no contact
 
