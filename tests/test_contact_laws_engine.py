@@ -69,7 +69,10 @@ def test_an_impact_in_the_engine_equals_scipy(law):
     assert np.max(np.abs(y - reference)) < 1e-8
 
 
-@pytest.mark.parametrize("preset", ["fig3a", "tower-wall"])
+@pytest.mark.parametrize("preset", [
+    "fig3a",
+    pytest.param("tower-wall", marks=pytest.mark.slow),  # two engines of its own: -m slow
+])
 def test_monodromy_with_a_rate_dependent_law_is_the_flows_derivative(preset):
     """Jankowski's damping enters the variational equations of the line contact (no
     memory, no jumps)."""

@@ -72,7 +72,10 @@ def _check_monodromy(system: System, cycles: int = 30) -> None:
 @pytest.mark.parametrize("preset,law", [("tower-wall", "hertzdamp"),
                                         ("tower-wall", "kelvin-voigt"),
                                         ("wall", "hertzdamp"),
-                                        ("fig4-translational", "hunt-crossley")])
+                                        # compiles two engines of its own: the full
+                                        # matrix of laws and models runs with -m slow
+                                        pytest.param("fig4-translational", "hunt-crossley",
+                                                     marks=pytest.mark.slow)])
 def test_monodromy_across_memory_and_jumps_is_the_strobe_maps_derivative(preset, law):
     """hertzdamp's v0 sensitivity (through the onset state and time) on a line and a
     point contact, and Kelvin-Voigt's line contact (a continuous resultant whose

@@ -542,7 +542,12 @@ def test_floquet_multipliers_do_not_depend_on_the_section_phase():
     assert inside.corners == base.corners[1:] + base.corners[:1]
 
 
-@pytest.mark.parametrize("law", ["hertzdamp", "kelvin_voigt"])
+@pytest.mark.parametrize("law", [
+    "hertzdamp",
+    # two engines of its own (the jump's exact tangent is also checked on the
+    # tower-wall model by test_contact_tangent): -m slow
+    pytest.param("kelvin_voigt", marks=pytest.mark.slow),
+])
 def test_laws_with_memory_or_jumps_have_exact_floquet_exponents(law):
     """A law with per-episode memory (hertzdamp) or a force jump at onset (Kelvin-Voigt)
     on the line contact: the variational monodromy (memory sensitivity, one-sided
