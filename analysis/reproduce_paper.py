@@ -1457,6 +1457,11 @@ statistics barely change.
 | group_periodic_windows.csv | every run of group-periodic points, both classifications |
 | paper_windows_check.csv | classify() at 0.68 ... 1.39 for l/A_g = 30, 100, 1000 |
 | claims.json, claims.md, runtime.json | every number above; the run's timing |
+
+Other studies: [contact_laws.md](contact_laws.md): the Fig. 4 spectrum and its \
+chaotic share under damped contact laws (hertzdamp, jankowski at e = 0.65, 0.5), \
+and peak impact forces over 50 stochastic records \
+(`analysis/contact_laws_study.py`).
 """
 
 
