@@ -6,6 +6,9 @@ The scene API is exported lazily, so that ``import chaospound`` stays light
 
 from __future__ import annotations
 
+import sys
+import types
+
 __version__ = "0.1.0"
 
 _SCENE_EXPORTS = (
@@ -50,8 +53,27 @@ def __getattr__(name: str) -> object:
         import importlib
 
         value = getattr(importlib.import_module(_OTHER_EXPORTS[name]), name)
-        # importing chaospound.simulate bound the package attribute "simulate" to the
-        # module; the function is the export
         globals()[name] = value
         return value
     raise AttributeError(f"module 'chaospound' has no attribute {name!r}")
+
+
+class _Package(types.ModuleType):
+    """The package, whose exported function ``simulate`` shares its name with the
+    submodule ``chaospound.simulate``.
+
+    Importing a submodule binds it as an attribute of its package, so whoever
+    imported ``chaospound.simulate`` first used to decide what ``from chaospound
+    import simulate`` gave: the function, or the module ("'module' object is not
+    callable"). The binding of that submodule is refused, so the name is always
+    the function; the module is ``sys.modules["chaospound.simulate"]``, and
+    ``from chaospound.simulate import ...`` works as ever.
+    """
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name == "simulate" and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

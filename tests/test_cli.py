@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import io
 import json
 import os
@@ -164,6 +165,21 @@ def test_help_and_validation_do_not_import_the_kernels():
     assert done.stdout.strip() == "[]"
 
 
+def test_simulate_is_the_function_whoever_imported_its_module_first():
+    """The package's export and the submodule share the name ``simulate``; a fresh
+    interpreter that imports the module first still gets the function."""
+    probe = (
+        "import chaospound.simulate\n"
+        "from chaospound.simulate import Simulation\n"
+        "import chaospound\n"
+        "from chaospound import simulate\n"
+        "print(callable(simulate), callable(chaospound.simulate), Simulation.__name__)\n"
+    )
+    done = run_subprocess(code=probe)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "True True Simulation"
+
+
 def test_help_returns_zero_instead_of_exiting(capsys):
     code, out, err = run(capsys, "simulate", "--help")
     assert code == 0
@@ -178,12 +194,10 @@ def test_numerical_failure_is_one_line_exit_1(capsys):
 
 
 def test_interrupt_is_one_line_exit_130(capsys, monkeypatch):
-    import chaospound.simulate
-
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(chaospound.simulate, "simulate", interrupted)
+    monkeypatch.setattr(importlib.import_module("chaospound.simulate"), "simulate", interrupted)
     code, out, err = run(capsys, "simulate", "--preset", "fig3a", *SHORT)
     assert_one_line_error(code, out, err, "interrupted", exit_code=130)
 
@@ -372,12 +386,10 @@ def test_output_refuses_to_overwrite(capsys, tmp_path):
 
 
 def test_output_into_missing_folder_is_refused_before_running(capsys, tmp_path, monkeypatch):
-    import chaospound.simulate
-
     def must_not_run(*args, **kwargs):
         raise AssertionError("simulate ran although the output path is unusable")
 
-    monkeypatch.setattr(chaospound.simulate, "simulate", must_not_run)
+    monkeypatch.setattr(importlib.import_module("chaospound.simulate"), "simulate", must_not_run)
     target = tmp_path / "no" / "such" / "run.json"
     code, out, err = run(capsys, "simulate", "--preset", "wall", "--output", str(target))
     assert_one_line_error(code, out, err, "run.json")
@@ -536,7 +548,7 @@ def test_status_line_waits_for_slow_work():
 
 def test_compilation_is_announced_at_once(monkeypatch):
     """Kernels not in numba's disk cache: the notice comes before the compilation."""
-    import chaospound.simulate as jit  # where kernels_cached lives
+    jit = importlib.import_module("chaospound.simulate")  # where kernels_cached lives
 
     stream = FakeTerminal()
     monkeypatch.setattr(sys, "stderr", stream)
