@@ -22,14 +22,53 @@ changes). What they cost and save per step is measured by
 ``benchmarks/bench_simulate.py`` (results/bench_simulate.json).
 """
 
-from numba import njit
+from numba import config, njit
+from numba.core import types
+from numba.core.registry import CPUDispatcher
 
 from .cache import invalidate_stale_cache
 
 invalidate_stale_cache()  # before any kernel is defined, so before any is loaded
 
-kernel = njit(cache=True, _nrt=False, error_model="numpy")
-inline = njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+
+class KernelDispatcher(CPUDispatcher):
+    """A dispatcher that compiles a kernel once per argument *type* when another
+    kernel calls it, not once per constant value.
+
+    numba types a constant argument at a call site by its value
+    (``Literal[int](0)``, ``Literal[bool](True)``) and compiles the callee
+    again for each such value: the engine's loop called ``end_value``,
+    ``locate_root``, ``update_peak``, ``record_onset`` ... with a constant in one
+    place and a variable in another, and numba typed, lowered and optimised
+    each of them two or three times per composition (about a quarter of an
+    engine's compile time). Constants still reach the machine code: LLVM
+    propagates them after inlining. The arithmetic is the same, so the results
+    are bitwise the same (benchmarks/golden.py).
+    """
+
+    def get_call_template(self, args, kws):
+        args = tuple(types.unliteral(a) for a in args)
+        kws = {name: types.unliteral(a) for name, a in kws.items()}
+        return super().get_call_template(args, kws)
+
+
+def _jit(cache: bool, **options):
+    """``njit(cache=cache, **options)`` building a :class:`KernelDispatcher`."""
+    targetoptions = dict(options, nopython=True, boundscheck=None)
+
+    def wrap(func):
+        if config.DISABLE_JIT:
+            return func
+        dispatcher = KernelDispatcher(py_func=func, locals={}, targetoptions=targetoptions)
+        if cache:
+            dispatcher.enable_caching()
+        return dispatcher
+
+    return wrap
+
+
+kernel = _jit(True, _nrt=False, error_model="numpy")
+inline = _jit(True, _nrt=False, error_model="numpy", forceinline=True)
 driver = njit(cache=True, error_model="numpy")
 
 
@@ -53,5 +92,5 @@ def is_cached(dispatcher) -> bool | None:
 
 #: as :data:`kernel` and :data:`inline`, without the disk cache: for engines built in
 #: memory (a user system whose functions cannot be imported by name)
-kernel_uncached = njit(_nrt=False, error_model="numpy")
-inline_uncached = njit(_nrt=False, error_model="numpy", forceinline=True)
+kernel_uncached = _jit(False, _nrt=False, error_model="numpy")
+inline_uncached = _jit(False, _nrt=False, error_model="numpy", forceinline=True)
