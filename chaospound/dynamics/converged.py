@@ -41,7 +41,10 @@ confidences of ``docs/classification.md``), doing less work per point:
    settled to a period (rule 3 at tol: a long transient ended) the search
    goes back to step 3, else
    :func:`classify_sequence` applies classify's rule 6 (period, then lambda
-   against 3 sigma and K).
+   against 3 sigma and K). Where rule 6 cannot name the point, the exponent
+   goes on from the record's end, up to ``LONGER_RUN`` times ``EXPONENT_CAP``
+   cycles in all (classify's rerun near the 3-sigma line), stopping early as in
+   step 4, and rule 6 reads the record again with it.
 6. Budget. At most ``max_transient`` cycles of sections and exponents;
    beyond, ``unresolved`` with the reason in ``evidence["why"]``.
 
@@ -62,6 +65,7 @@ import numpy as np
 
 from ..scene import Scene
 from .classify import (
+    LONGER_RUN,
     SIGMAS,
     TOL_PER_RTOL,
     TRANSIENT_MARGIN,
@@ -357,23 +361,9 @@ class _Classifier:
         align = np.zeros((0, 1))
         augmented, _, _ = advance(self.flow, augmented, TANGENT_ALIGN, tangent="qr",
                                   tangent_log=align, record_from=TANGENT_ALIGN)
-        period = self.flow.period
         blocks: list[float] = []
-        ran = TANGENT_ALIGN
-        z = 0.0
-        lam = err = math.nan
-        while ran < EXPONENT_CAP + TANGENT_ALIGN and self.cycles + ran < self.max_transient:
-            log = np.zeros((BLOCK, 1))
-            augmented, _, _ = advance(self.flow, augmented, BLOCK, tangent="qr",
-                                      tangent_log=log, record_from=0)
-            blocks.append(float(log.sum()) / (BLOCK * period))
-            ran += BLOCK
-            if len(blocks) >= MIN_BLOCKS:
-                lam = float(np.mean(blocks))
-                err = float(np.std(blocks, ddof=1) / math.sqrt(len(blocks)))
-                z = lam / max(err, 1e-300)
-                if abs(z) > Z_EARLY:
-                    break
+        augmented, ran, lam, err, z = self._blocks(augmented, blocks, EXPONENT_CAP)
+        ran += TANGENT_ALIGN
         self.cycles += ran
         state = augmented[:n].copy()
         self.sections = [state[None, :]]
@@ -389,7 +379,32 @@ class _Classifier:
             return None
         if not blocks or len(blocks) < MIN_BLOCKS:
             return None  # the budget ran out: the driver says so
-        return self._zero_one(state, lam, err)
+        return self._zero_one(state, lam, err, blocks)
+
+    def _blocks(self, augmented, blocks: list[float], cycles: int):
+        """Accumulate exponent blocks (appended to ``blocks``) from the tangent state
+        ``augmented`` for at most ``cycles`` cycles (and the budget), stopping once
+        ``|lambda| / sigma > Z_EARLY`` over all the blocks.
+
+        Returns ``(augmented, cycles run, lambda, sigma, lambda / sigma)``.
+        """
+        period = self.flow.period
+        ran = 0
+        lam = err = math.nan
+        z = 0.0
+        while ran < cycles and self.cycles + TANGENT_ALIGN + ran < self.max_transient:
+            log = np.zeros((BLOCK, 1))
+            augmented, _, _ = advance(self.flow, augmented, BLOCK, tangent="qr",
+                                      tangent_log=log, record_from=0)
+            blocks.append(float(log.sum()) / (BLOCK * period))
+            ran += BLOCK
+            if len(blocks) >= MIN_BLOCKS:
+                lam = float(np.mean(blocks))
+                err = float(np.std(blocks, ddof=1) / math.sqrt(len(blocks)))
+                z = lam / max(err, 1e-300)
+                if abs(z) > Z_EARLY:
+                    break
+        return augmented, ran, lam, err, z
 
     def _record_sections(self, state) -> np.ndarray:
         from ..simulate import simulate
@@ -417,7 +432,7 @@ class _Classifier:
         self.evidence["decided_by"] = "exponent"
         return self._result(regime, record, confidence=confidence, window=self.record)
 
-    def _zero_one(self, state, lam, err) -> ConvergedResult | None:
+    def _zero_one(self, state, lam, err, blocks: list[float]) -> ConvergedResult | None:
         from ..simulate import simulate
 
         record = simulate(self.target, transient=0, record=ZERO_ONE_CYCLES,
@@ -437,6 +452,11 @@ class _Classifier:
                                    tol=self.tol, exponent=lam, exponent_error=err,
                                    test01=True)
         self.evidence["decided_by"] = "exponent and 0-1 test"
+        if regime.regime == "unresolved" and self.cycles < self.max_transient:
+            # the two disagree: near the 3-sigma line a run of EXPONENT_CAP cycles
+            # decides by chance, so the exponent goes on from the record's end for up to
+            # LONGER_RUN times as long in all, as classify's rerun does, and decides anew
+            regime, lam, err = self._longer_exponent(record, blocks, regime)
         if regime.regime == "unresolved":
             k = regime.zero_one
             self.evidence["why"] = (
@@ -445,6 +465,31 @@ class _Classifier:
                 + ("n/a" if k is None else f"{k:.2f}") + " do not agree on a regime")
         return self._result(regime, record, confidence=regime.confidence,
                             window=ZERO_ONE_CYCLES)
+
+    def _longer_exponent(self, record, blocks: list[float], regime: Regime):
+        """More exponent blocks from the end of the 0-1 record, then the record read
+        again with the longer exponent. Returns ``(regime, lambda, sigma)``."""
+        n = self.flow.dim
+        augmented = np.zeros(2 * n)
+        augmented[:n] = record.strobe.state[-1]
+        augmented[n] = 1.0
+        augmented, _, _ = advance(self.flow, augmented, TANGENT_ALIGN, tangent="qr",
+                                  tangent_log=np.zeros((0, 1)), record_from=TANGENT_ALIGN)
+        before = len(blocks)
+        _, ran, lam, err, z = self._blocks(augmented, blocks,
+                                           (LONGER_RUN - 1) * EXPONENT_CAP)
+        self.cycles += ran + TANGENT_ALIGN
+        self.evidence["exponent_stages"].append({
+            "cycles": ran, "blocks": len(blocks) - before, "exponent": lam, "error": err,
+            "exponent_over_error": z,
+            "decision": "exponent and 0-1 test disagreed: the exponent went on"})
+        imp = record.impacts
+        phase = _phase_from_section(imp.time, imp.cycle, record.period, self.section_phase)
+        regime = classify_sequence(record.strobe.state * self.weights, imp.cycle, phase,
+                                   imp.velocity, imp.labels, max_period=self.max_period,
+                                   tol=self.tol, exponent=lam, exponent_error=err,
+                                   test01=True)
+        return regime, lam, err
 
     # ------------------------------------------------------------- results
     def _result(self, regime: Regime, record, *, confidence: float,
