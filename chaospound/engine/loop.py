@@ -89,6 +89,8 @@ from chaospound.kernels.free import (
     onset_tangent,
     reset_tangent_memory,
     rhs,
+    rhs_vectors,
+    saltation_tangent,
     section_tangent,
     section_tangent_memory,
     step,
@@ -378,6 +380,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
 
         # process the events in time order (interpolated states when not landed)
         peak_row = episode  # the episode running during this step, if recorded
+        salted = False  # a saltation changed the tangent vectors of y_new
         for i in range(n_ev):
             theta = ev_theta[i]
             end = ev_end[i]
@@ -405,6 +408,15 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                 inside_hi = not inside_hi
             if LAW_JUMPS:
                 law_on_sides(p, LAW, inside_lo, inside_hi)
+            if TANGENT and LAW_JUMPS and N_ENDS == 1 and n_vectors > 0:
+                # the point force jumps here: the saltation matrix maps the tangent
+                # vectors at the step's end, where the step landed on the event (or,
+                # an event inside the step, past it: first order in the rest of the
+                # step, which the state's error control has made tiny across the
+                # jump; docs/contact_laws.md section 7)
+                model_ends(t_ev, work, p, ends_tmp)
+                saltation_tangent(p, ends_tmp[2], inside_lo, y_new, n_base, n_vectors, work2)
+                salted = True
             now_active = inside_lo or inside_hi
             if now_active and not active and LAW_MEMORY:
                 # the law's per-episode memory (v0), at every onset, recorded or not
@@ -443,6 +455,10 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             active = now_active
         if status != STATUS_OK:
             break
+        if TANGENT and LAW_JUMPS and N_ENDS == 1 and salted:
+            # the step's last derivative is the next step's first stage: the vectors'
+            # part again, from the mapped vectors with the Jacobian of the new side
+            rhs_vectors(t_here + h_try, y_new, p, f_new)
 
         # peak penetration and force of the episode that ran during this step
         if peak_row >= 0:

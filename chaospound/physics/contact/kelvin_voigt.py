@@ -142,12 +142,62 @@ def point_force(p, base, d, rate):
 
 @inline
 def point_stiffness(p, base, d, rate):
-    """``(dF/dd, dF/drate)`` of :func:`point_force` (0 where clipped)."""
-    if d <= 0.0:
+    """``(dF/dd, dF/drate)`` of :func:`point_force` (0 where clipped), units of K_Ax
+    and K_Ax / omega_Ax.
+
+    In contact where the engine's flag says so (:func:`on_sides`; a point contact
+    has one end, both flags equal), else where d > 0 (a block no engine has run):
+    the variational equations need the one-sided Jacobian on each side of an
+    onset or a release at every stage, and a landed state's d is a rounding error
+    from 0 on either side (docs/contact_laws.md section 7). The force itself
+    (:func:`point_force`) follows the sign of d.
+    """
+    bits = int(p[base + 2])
+    inside = d > 0.0
+    if bits & SIDES_KNOWN:
+        inside = (bits & SIDE_LO) != 0
+    if not inside:
         return 0.0, 0.0
     if _no_pull(p, base) and p[base] * d + p[base + 1] * rate < 0.0:
         return 0.0, 0.0
     return p[base], p[base + 1]
+
+
+@kernel
+def point_jump(p, base, rate, onset):
+    """The point force's jump where d crosses 0, divided by the closing rate.
+
+    The saltation matrix of a point contact (docs/contact_laws.md section 7) is
+    ``I + (f+ - f-) grad(d)^T / d'``, and ``f+ - f-`` is the jump ``dF`` of the
+    force times its column of the vector field, so the engine needs
+    ``dF / d'``, a contact stiffness (:func:`chaospound.engine.memory.saltation_tangent`).
+    Just inside, at d = 0, the force is ``c d'`` (``max(c d', 0)`` with no_pull), so
+
+    * onset (``onset`` True, d' >= 0): ``dF = c d'``, returns ``c``;
+    * plain release (d' <= 0): ``dF = -c d'``, returns ``-c``;
+    * no_pull release: ``k d + c d' = c d' < 0`` is clipped, F is already 0: returns 0
+      (the clipped law's release is continuous); likewise an onset at d' < 0.
+
+    Parameters
+    ----------
+    p : ndarray
+        Packed parameters; the block is ``(k, c, no_pull)`` from ``p[base]``.
+    base : int
+        First slot of the law's block.
+    rate : float
+        Closing rate d' at the event, units of A_g omega_Ax (only its sign matters).
+    onset : bool
+        True where d becomes positive, False where it becomes negative.
+
+    Returns
+    -------
+    float
+        ``dF / d'``, units of K_Ax / omega_Ax (finite at a graze, d' -> 0).
+    """
+    c = p[base + 1]
+    if _no_pull(p, base) and (rate < 0.0 if onset else rate <= 0.0):
+        return 0.0
+    return c if onset else -c
 
 
 @kernel
