@@ -265,7 +265,8 @@ def _bindings(c: Composition) -> str:
     lines.append(f"from {memory} import "
                  + ", ".join(f"{f} as law_{f}" for f in MEMORY_FUNCTIONS))
     jumps = law if law_module.JUMPS else "chaospound.physics.contact.memoryless"
-    lines.append(f"from {jumps} import on_sides as law_on_sides, point_jump as law_point_jump")
+    lines.append(f"from {jumps} import on_sides as law_on_sides, point_jump as law_point_jump, "
+                 "point_switch as law_point_switch, on_switch as law_on_switch")
     if not model_carries_memory(c.model):
         lines.append("from chaospound.physics.models.no_memory import "
                      + ", ".join(MODEL_MEMORY_FUNCTIONS))
