@@ -28,9 +28,13 @@ Two variants, by the block's ``no_pull`` flag:
   reverses while the faces still overlap). No tensile force, but the measured e
   exceeds the target (docs/contact_laws.md gives the numbers).
 
-The force jumps at onset (``c v0``), hence ``JUMPS = True``. On a line contact
-the penetrated part and, with ``no_pull``, the part where ``k d + c r > 0`` are
-both half-lines in y (d and r are linear), so the resultants are closed forms:
+The force jumps at onset (``c v0``), hence ``JUMPS = True``: on a point
+contact the engine maps the tangent vectors there by the saltation matrix, from
+:func:`point_jump`, and in a tangent run lands on the no-pull switch ``k d + c
+d' = 0``, :func:`point_switch` (docs/contact_laws.md section 7). On a line
+contact the penetrated part and, with ``no_pull``, the part where ``k d + c r >
+0`` are both half-lines in y (d and r are linear), so the resultants are closed
+forms:
 the plain law through the moments of :mod:`.moments` with j = 1 and j = 0
 (``M0(0)`` is the penetrated fraction), the clipped law by integrating the
 linear ``k d + c r`` over the intersection.
