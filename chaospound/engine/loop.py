@@ -404,7 +404,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
 
         # process the events in time order (interpolated states when not landed)
         peak_row = episode  # the episode running during this step, if recorded
-        salted = False  # a saltation changed the tangent vectors of y_new
+        salted = False  # a point event changed y_new's vectors or their Jacobian's side
         for i in range(n_ev):
             theta = ev_theta[i]
             end = ev_end[i]
