@@ -3,13 +3,18 @@
 For each case, the engine's propagator monodromy of one period against a
 4th-order central difference of its stroboscopic map (the helpers of
 tests/test_contact_tangent.py, imported from there, so the table and the tests
-measure the same thing), after 30 periods from the scene's initial state; and
-on fig4 at T/T_Ax = 0.9, e = 0.65 (chaotic), the QR largest Lyapunov exponent
-against the two-trajectory estimate. docs/contact_laws.md section 7 quotes it.
+measure the same thing), after 30 periods from the scene's initial state; on
+fig4 at T/T_Ax = 0.9, e = 0.65 (chaotic), the QR largest Lyapunov exponent
+against the two-trajectory estimate; and Kelvin-Voigt's saltation on the point
+models (tests/test_saltation.py, its cases and helpers): on the periodic
+orbits, the propagator monodromy against the orbit solver's 5-point finite
+difference and the QR exponent against ``log |mu_1| / T``, on the chaotic pair
+the QR exponent against the two-trajectory estimate. docs/contact_laws.md
+section 7 quotes it.
 
 Usage::
 
-    python analysis/contact_tangent.py            # results/contact_tangent.{md,json}, ~10 min
+    python analysis/contact_tangent.py            # results/contact_tangent.{md,json}, ~15 min
     python analysis/contact_tangent.py --out DIR  # elsewhere
 """
 
@@ -25,20 +30,72 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-MONODROMY = (("tower-wall", "hertzdamp", 1e-12), ("tower-wall", "hunt-crossley", 1e-12),
-             ("tower-wall", "kelvin-voigt", 1e-12), ("fig3a", "hertzdamp", 1e-12),
-             ("fig3a", "kelvin-voigt", 1e-10))
+#: (model, law, rtol, extra scene values); the point models with the law's
+#: default e = 0.6 at their presets' T/T_Ax (wall 0.7, fig4-translational 1.0)
+MONODROMY = (("tower-wall", "hertzdamp", 1e-12, {}), ("tower-wall", "hunt-crossley", 1e-12, {}),
+             ("tower-wall", "kelvin-voigt", 1e-12, {}), ("fig3a", "hertzdamp", 1e-12, {}),
+             ("fig3a", "kelvin-voigt", 1e-10, {}), ("wall", "kelvin-voigt", 1e-12, {}),
+             ("wall", "kelvin-voigt", 1e-12, {"no_pull": True}),
+             ("fig4-translational", "kelvin-voigt", 1e-12, {}),
+             ("fig4-translational", "kelvin-voigt", 1e-12, {"no_pull": True}))
 CHAOTIC = ("hertzdamp", "hunt-crossley", "kelvin-voigt")
 
 
-def _cases():
-    """tests/test_contact_tangent.py as a module (its helpers)."""
+def _cases(name: str = "test_contact_tangent"):
+    """A test module of tests/ as a module (its helpers and cases)."""
     sys.path.insert(0, str(ROOT))
-    spec = importlib.util.spec_from_file_location("contact_tangent_cases",
-                                                  ROOT / "tests" / "test_contact_tangent.py")
+    spec = importlib.util.spec_from_file_location(f"{name}_cases",
+                                                  ROOT / "tests" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def _label(law: str, values: dict) -> str:
+    return law + (" no-pull" if values.get("no_pull") else "")
+
+
+def _saltation() -> dict:
+    """The measurements of tests/test_saltation.py (Kelvin-Voigt on the point models)."""
+    import math
+    from dataclasses import replace
+
+    from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
+    from chaospound.dynamics.system import System
+    from chaospound.orbits import StroboscopicMap, find_orbit, finite_difference_monodromy
+    from chaospound.orbits.maps import variational_monodromy
+
+    cases = _cases("test_saltation")
+    orbits = []
+    for (preset, ratio, no_pull), label in zip(cases.ORBITS, cases.IDS, strict=True):
+        smap = replace(StroboscopicMap.of(cases._scene(preset, ratio, no_pull),
+                                          monodromy_provider=finite_difference_monodromy),
+                       jacobian_rtol=None)
+        orbit = find_orbit(smap, transient=60)
+        _, matrix = variational_monodromy(smap, orbit.state, 1)
+        error = np.max(np.abs(matrix - orbit.monodromy)) / np.max(np.abs(orbit.monodromy))
+        expected = math.log(abs(orbit.multipliers[0])) / smap.system.period
+        system = System.from_scene(cases._scene(preset, ratio, no_pull).with_params(
+            method="dop853", rtol=1e-11, atol=1e-13))
+        qr = lyapunov_spectrum(system, k=1, transient=0, tangent_transient=20, cycles=60,
+                               n_blocks=6, initial_state=orbit.state)
+        orbits.append({"case": label, "period_ratio": ratio, "no_pull": no_pull,
+                       "impacts_per_period": orbit.impacts_per_period,
+                       "multipliers_abs": [float(abs(z)) for z in orbit.multipliers],
+                       "relative_error": float(error), "log_mu_over_T": expected,
+                       "qr": float(qr.exponents[0]), "qr_error": float(qr.errors[0])})
+        print(orbits[-1], flush=True)
+    chaos = []
+    for ratio, e, no_pull in ((1.25, 0.65, False), (1.24, 0.8, True)):
+        scene = cases._scene("fig4-translational", ratio, no_pull, e).with_params(
+            method="dop853", rtol=1e-10, atol=1e-12)
+        qr = lyapunov_spectrum(scene, k=1, cycles=1000, transient=100)
+        two = largest_exponent_two_trajectory(scene, cycles=1000, transient=100)
+        chaos.append({"period_ratio": ratio, "restitution": e, "no_pull": no_pull,
+                      "qr": float(qr.exponents[0]), "qr_error": float(qr.errors[0]),
+                      "two": two.exponent, "two_error": two.error})
+        print(chaos[-1], flush=True)
+    return {"orbits": orbits, "chaotic_pair": chaos}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -51,16 +108,16 @@ def main(argv: list[str] | None = None) -> int:
 
     cases = _cases()
     rows = []
-    for preset, law, rtol in MONODROMY:
+    for preset, law, rtol, values in MONODROMY:
         start = time.perf_counter()
-        system = cases._system(preset, law, rtol=rtol)
+        system = cases._system(preset, law, rtol=rtol, **values)
         state, _, _ = advance(system, system.initial_state, 30, from_time_zero=True)
         memory = system.params.copy()
         _, matrix = monodromy(system, state, 1)
         reference = cases._strobe_derivative(system, state, memory)
         error = float(np.max(np.abs(matrix - reference)) / np.max(np.abs(reference)))
-        rows.append({"model": preset, "law": law, "rtol": rtol, "relative_error": error,
-                     "seconds": time.perf_counter() - start})
+        rows.append({"model": preset, "law": _label(law, values), "rtol": rtol,
+                     "relative_error": error, "seconds": time.perf_counter() - start})
         print(rows[-1], flush=True)
     chaos = []
     for law in CHAOTIC:
@@ -72,10 +129,12 @@ def main(argv: list[str] | None = None) -> int:
         chaos.append({"law": law, "qr": float(qr.exponents[0]), "qr_error": float(qr.errors[0]),
                       "two": two.exponent, "two_error": two.error})
         print(chaos[-1], flush=True)
+    saltation = _saltation()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "contact_tangent.json").write_text(json.dumps(
-        {"monodromy": rows, "chaotic_fig4_0.9": chaos}, indent=1) + "\n")
+        {"monodromy": rows, "chaotic_fig4_0.9": chaos, "saltation": saltation},
+        indent=1) + "\n")
     lines = ["# Tangent dynamics of the laws with memory and jumps", "",
              "Generated by `python analysis/contact_tangent.py`.", "",
              "| model | law | rtol | monodromy vs central differences (relative) |",
@@ -86,6 +145,21 @@ def main(argv: list[str] | None = None) -> int:
               "| law | QR lambda_1 | two trajectories |", "|---|---|---|"]
     lines += [f"| {c['law']} | {c['qr']:.4f} +- {c['qr_error']:.4f} | "
               f"{c['two']:.4f} +- {c['two_error']:.4f} |" for c in chaos]
+    lines += ["", "Kelvin-Voigt on the point models (saltation at the force's jumps), e = 0.65, "
+              "on stable period-1 orbits (tests/test_saltation.py): the propagator "
+              "monodromy against the 5-point finite difference (rtol 1e-12), the QR "
+              "exponent (60 cycles, rtol 1e-11) against log |mu_1| / T:", "",
+              "| model | T/T_Ax | impacts | abs(mu) | monodromy vs finite differences "
+              "(relative) | QR lambda_1 | log abs(mu_1) / T |", "|---|---|---|---|---|---|---|"]
+    lines += [f"| {o['case']} | {o['period_ratio']:g} | {o['impacts_per_period']} | "
+              + ", ".join(f"{m:.4f}" for m in o["multipliers_abs"])
+              + f" | {o['relative_error']:.2g} | {o['qr']:.5f} +- {o['qr_error']:.2g} | "
+              f"{o['log_mu_over_T']:.5f} |" for o in saltation["orbits"]]
+    lines += ["", "Chaotic pair (fig4-translational), 100 + 1000 cycles, rtol 1e-10:", "",
+              "| T/T_Ax | e | no_pull | QR lambda_1 | two trajectories |", "|---|---|---|---|---|"]
+    lines += [f"| {c['period_ratio']:g} | {c['restitution']:g} | {c['no_pull']} | "
+              f"{c['qr']:.4f} +- {c['qr_error']:.4f} | {c['two']:.4f} +- {c['two_error']:.4f} |"
+              for c in saltation["chaotic_pair"]]
     (out / "contact_tangent.md").write_text("\n".join(lines) + "\n")
     return 0
 

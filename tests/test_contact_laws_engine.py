@@ -113,14 +113,17 @@ def test_dissipation_lowers_the_rebound():
     assert rebound[0] > rebound[1] > rebound[2]
 
 
-@pytest.mark.parametrize("law", ["kelvin-voigt", "jankowski"])
-def test_tangent_dynamics_are_refused_where_they_would_be_wrong(law):
-    """Kelvin-Voigt's point force jumps (its saltation matrix is not implemented) and
-    Jankowski's point Jacobian is singular at onset (the laws with memory are exact
-    there now: tests/test_contact_tangent.py)."""
-    system = System.from_scene(load_preset("wall").with_params(contact_law=law))
-    with pytest.raises(ValueError, match="not available"):
-        system.engine("qr")
+def test_tangent_dynamics_are_refused_where_they_would_be_wrong():
+    """Jankowski's point Jacobian is singular at onset: refused on the point models
+    (the laws with memory are exact there, tests/test_contact_tangent.py, and so is
+    Kelvin-Voigt's jumping force, with its saltation matrix, tests/test_saltation.py)."""
+    from chaospound.engine.compose import Composition, check_tangent
+
+    for model in ("wall", "pair"):
+        with pytest.raises(ValueError, match="not available"):
+            check_tangent(Composition(model, "jankowski", tangent="qr"))
+        for law in ("kelvin-voigt", "hertzdamp", "hunt-crossley"):
+            check_tangent(Composition(model, law, tangent="propagator"))
 
 
 def test_a_law_rejects_an_impossible_restitution():

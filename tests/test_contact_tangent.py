@@ -4,7 +4,8 @@ docs/contact_laws.md section 7. Hertzdamp and Hunt-Crossley keep the onset
 velocity v0 of each episode (a function of the state and time of the onset);
 Kelvin-Voigt's pointwise force jumps at the contact edge. On the line-contact
 models (towers, tower-wall) the engine carries the memory's sensitivity in the
-variational equations; here:
+variational equations (Kelvin-Voigt's saltation on the point models:
+tests/test_saltation.py); here:
 
 * the propagator monodromy of one period equals a central finite difference of
   the engine's own stroboscopic map (the memory in the packed vector restored
@@ -230,21 +231,22 @@ SHORT = ["--transient", "5", "--record", "2", "--cycles", "10"]
 
 
 def test_cli_lyapunov_where_the_tangent_is_refused(capsys):
-    """Kelvin-Voigt on the point-contact wall (its force jumps at onset): QR is refused
-    in one line that names the way out, and --two-trajectory alone runs."""
+    """Jankowski on the point-contact wall (its Jacobian is singular at every onset):
+    QR is refused in one line that names the way out, and --two-trajectory alone
+    runs. (Kelvin-Voigt there runs: tests/test_saltation.py.)"""
     from chaospound.cli import main
 
-    argv = ["lyapunov", "--preset", "wall", "--set", "contact_law=kelvin-voigt", *SHORT]
+    argv = ["lyapunov", "--preset", "wall", "--set", "contact_law=jankowski", *SHORT]
     code = main(argv)
     out, err = capsys.readouterr()
     assert code == 2 and out == ""
     assert len(err.splitlines()) == 1 and "Traceback" not in err
-    assert "kelvin-voigt" in err and "--two-trajectory" in err
+    assert "jankowski" in err and "--two-trajectory" in err
     code = main([*argv, "--two-trajectory", "--json"])
     out, err = capsys.readouterr()
     assert code == 0, err
     document = json.loads(out)
-    assert document["qr"]["available"] is False and "kelvin-voigt" in document["qr"]["reason"]
+    assert document["qr"]["available"] is False and "jankowski" in document["qr"]["reason"]
     assert math.isfinite(document["two_trajectory"]["exponent"])
     code = main([*argv, "--two-trajectory"])
     out, err = capsys.readouterr()

@@ -265,7 +265,8 @@ def _bindings(c: Composition) -> str:
     lines.append(f"from {memory} import "
                  + ", ".join(f"{f} as law_{f}" for f in MEMORY_FUNCTIONS))
     jumps = law if law_module.JUMPS else "chaospound.physics.contact.memoryless"
-    lines.append(f"from {jumps} import on_sides as law_on_sides")
+    lines.append(f"from {jumps} import on_sides as law_on_sides, point_jump as law_point_jump, "
+                 "point_switch as law_point_switch, on_switch as law_on_switch")
     if not model_carries_memory(c.model):
         lines.append("from chaospound.physics.models.no_memory import "
                      + ", ".join(MODEL_MEMORY_FUNCTIONS))
@@ -358,10 +359,19 @@ def check_tangent(c: Composition) -> None:
     Exact (docs/contact_laws.md section 7): a law with per-episode memory (the
     onset velocity v0, a function of the state and time of the onset) on a
     model that carries its sensitivity (towers, tower-wall, wall, pair); a law
-    whose pointwise force jumps (Kelvin-Voigt) on a line contact, whose
-    resultant is continuous at a corner onset and release. Refused: memory on
-    a model that does not carry it, a jumping force on a point contact (its
-    saltation matrix is not implemented), and Jankowski's point contact.
+    whose force jumps (Kelvin-Voigt): on a line contact the resultant is
+    continuous at a corner onset and release and only the Jacobian jumps, on a
+    point contact (wall, pair) the engine maps the tangent vectors by the
+    saltation matrix at every onset and release
+    (:func:`chaospound.engine.memory.saltation_tangent`). Refused: memory on a
+    model that does not carry it, and a point contact whose Jacobian is
+    singular at every onset (Jankowski's, ``POINT_JACOBIAN_SINGULAR``).
+
+    Raises
+    ------
+    ValueError
+        One line naming the law, the model, why, and the way out (the
+        two-trajectory estimate, or a line-contact model).
     """
     if c.tangent == "none":
         return
@@ -373,17 +383,11 @@ def check_tangent(c: Composition) -> None:
                          "estimate (chaospound.dynamics.lyapunov."
                          "largest_exponent_two_trajectory), or a towers model, whose line "
                          "contact integrates the singularity")
-    why = ""
     if law.MEMORY and not model_carries_memory(c.model):
-        why = ("its onset velocity v0 is per-episode memory, whose sensitivity this model's "
-               "tangent dynamics do not carry")
-    elif law.JUMPS and c.model in POINT_MODELS:
-        why = ("its point force jumps at onset and release, which needs a saltation matrix "
-               "there")
-    if why:
         raise ValueError(f"contact law {c.law!r} on the {c.model} model: Lyapunov exponents "
-                         f"and monodromy matrices are not available ({why}); use the "
-                         "two-trajectory estimate "
+                         "and monodromy matrices are not available (its onset velocity v0 "
+                         "is per-episode memory, whose sensitivity this model's tangent "
+                         "dynamics do not carry); use the two-trajectory estimate "
                          "(chaospound.dynamics.lyapunov.largest_exponent_two_trajectory), "
                          "or a towers or tower-wall model")
 

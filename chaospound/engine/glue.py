@@ -21,7 +21,7 @@ from chaospound.kernels.free import (
     model_rhs,
     rhs_grounded,
 )
-from chaospound.kernels.jit import kernel
+from chaospound.kernels.jit import inline, kernel
 
 # ==== template ====
 
@@ -53,6 +53,23 @@ def rhs_tangent(t, y, p, ug, vg, out):
     sensitivity written at the episode's onset (:mod:`chaospound.engine.memory`).
     """
     model_rhs(t, y, p, ug, vg, out)
+    _vectors_rhs(t, y, p, out)
+
+
+@kernel
+def rhs_vectors(t, y, p, out):
+    """The tangent vectors' part of :func:`rhs_tangent` alone, ``out[N_BASE:]``.
+
+    The loop recomputes it where a saltation has changed the vectors at the end of
+    an accepted step (the step's last derivative is the next one's first stage),
+    leaving the state's part, ``out[:N_BASE]``, as the step computed it.
+    """
+    _vectors_rhs(t, y, p, out)
+
+
+@inline
+def _vectors_rhs(t, y, p, out):
+    """``V' = J(y) V`` (and the memory's term) for every tangent vector after the state."""
     n = N_BASE
     lin = model_linearize(t, y, p)
     for i in range(1, y.shape[0] // n):

@@ -31,7 +31,7 @@ from chaospound.engine.bookkeeping import (
     sort_events,
     store_sample,
 )
-from chaospound.engine.events import EXTREMUM_TOL, FORCE_RATE
+from chaospound.engine.events import EXTREMUM_TOL, FORCE_RATE, SWITCH
 from chaospound.engine.tables import (
     IMP_CORNER,
     IMP_CYCLE,
@@ -80,6 +80,8 @@ from chaospound.kernels.free import (
     initial_step,
     law_on_onset,
     law_on_sides,
+    law_on_switch,
+    law_point_switch,
     locate_extremum,
     locate_root,
     model_contact_point,
@@ -89,6 +91,8 @@ from chaospound.kernels.free import (
     onset_tangent,
     reset_tangent_memory,
     rhs,
+    rhs_vectors,
+    saltation_tangent,
     section_tangent,
     section_tangent_memory,
     step,
@@ -99,6 +103,7 @@ from chaospound.solvers.dense import dense_eval
 from chaospound.solvers.tableaux import MAX_DENSE, MAX_STAGES
 
 FOLLOW_CYCLES = 5  #: cycles an episode running at the window's end is followed
+SWITCH_END = 2  #: the event list's "end" of a point contact's switch surface (events.SWITCH)
 MERGE_TOL = 1e-10  #: events closer than this in time are handled together
 #: a ground sample closer than this (relative to max(1, |t|)) counts as reached: a
 #: step that landed on it a rounding error short does not take a second, tiny step
@@ -207,6 +212,10 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     active = inside_lo or inside_hi
     if LAW_JUMPS:  # the law's Jacobian follows the event flags (docs/contact_laws.md 7)
         law_on_sides(p, LAW, inside_lo, inside_hi)
+    clipped = False  # a point contact's no-pull force is clipped (tangent runs)
+    if TANGENT and LAW_JUMPS and N_ENDS == 1:
+        clipped = inside_lo and law_point_switch(p, LAW, ends_old[0], ends_old[2]) < 0.0
+        law_on_switch(p, LAW, clipped)
     episode = -1  # row of the impact whose episode is running, -1 if none recorded
     n_imp = 0
     n_traj = 0
@@ -331,6 +340,23 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                     ev_theta[n_ev] = theta2
                     ev_end[n_ev] = end
                     n_ev += 1
+        if TANGENT and LAW_JUMPS and N_ENDS == 1 and inside_lo:
+            # in contact, the no-pull switch k d + c d' = 0 of a point contact: the
+            # force is continuous there but its Jacobian jumps, which an
+            # un-located step would integrate to first order only
+            g_new = law_point_switch(p, LAW, ends_new[0], ends_new[2])
+            if (g_new < 0.0) != clipped:
+                if not dense_ready:
+                    dense_prepare(t_here, h_try, y, f0, y_new, f_new, p, stage, dense)
+                    stats[ST_RHS_EVALS] += DENSE_EVALS
+                    dense_ready = True
+                g_old = law_point_switch(p, LAW, ends_old[0], ends_old[2])
+                if g_old == 0.0 or (g_old < 0.0) != clipped:
+                    g_old = -1e-300 if clipped else 1e-300
+                ev_theta[n_ev] = locate_root(dense, y, t_here, h_try, p, SWITCH, 0.0, g_old,
+                                             1.0, g_new, 0.0, work, ends_tmp)
+                ev_end[n_ev] = SWITCH_END
+                n_ev += 1
 
         truncated_to_event = False
         short_next = -1
@@ -378,9 +404,20 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
 
         # process the events in time order (interpolated states when not landed)
         peak_row = episode  # the episode running during this step, if recorded
+        salted = False  # a point event changed y_new's vectors or their Jacobian's side
         for i in range(n_ev):
             theta = ev_theta[i]
             end = ev_end[i]
+            if TANGENT and LAW_JUMPS and N_ENDS == 1 and end == SWITCH_END:
+                if inside_lo:  # (no switch after a release earlier in the step)
+                    clipped = not clipped
+                    law_on_switch(p, LAW, clipped)
+                    if theta < 1.0 and not salted:  # the new Jacobian over the rest
+                        carry_saltation(dense, y, t_here, h_try, theta, t_here + theta * h_try,
+                                        p, 0.0, False, False, y_new, n_base, n_vectors, work,
+                                        work2)
+                    salted = True
+                continue
             if theta >= 1.0:
                 if landed_short(ends_new, end, inside_lo if end == 0 else inside_hi, y_new,
                                  n_base, rtol, atol):
@@ -405,6 +442,26 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                 inside_hi = not inside_hi
             if LAW_JUMPS:
                 law_on_sides(p, LAW, inside_lo, inside_hi)
+            if TANGENT and LAW_JUMPS and N_ENDS == 1 and n_vectors > 0:
+                # the point force jumps here: the saltation matrix maps the tangent
+                # vectors (docs/contact_laws.md section 7)
+                clipped = False  # from an onset (k d + c d' = c d' > 0), or out of contact
+                law_on_switch(p, LAW, False)
+                model_ends(t_ev, work, p, ends_tmp)
+                if theta >= 1.0 or salted:
+                    # landed: the vectors at the step's end are those at the event (a
+                    # second event inside one step: mapped at the end, first order in
+                    # the rest of the step)
+                    saltation_tangent(p, ends_tmp[2], inside_lo, y_new, n_base, n_vectors,
+                                      work2)
+                else:
+                    # inside the step (the state's error control makes a step across
+                    # the force's jump tiny, so most are): the vectors interpolated at
+                    # the event, mapped, and carried to the step's end with the new
+                    # side's Jacobian (the step used the old side's throughout)
+                    carry_saltation(dense, y, t_here, h_try, theta, t_ev, p, ends_tmp[2],
+                                    inside_lo, True, y_new, n_base, n_vectors, work, work2)
+                salted = True
             now_active = inside_lo or inside_hi
             if now_active and not active and LAW_MEMORY:
                 # the law's per-episode memory (v0), at every onset, recorded or not
@@ -443,6 +500,10 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             active = now_active
         if status != STATUS_OK:
             break
+        if TANGENT and LAW_JUMPS and N_ENDS == 1 and salted:
+            # the step's last derivative is the next step's first stage: the vectors'
+            # part again, from the mapped vectors with the Jacobian of the new side
+            rhs_vectors(t_here + h_try, y_new, p, f_new)
 
         # peak penetration and force of the episode that ran during this step
         if peak_row >= 0:
@@ -497,6 +558,34 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     stats[ST_IMPACTS] = n_imp
     stats[ST_STATUS] = status
     return n_imp
+
+
+@kernel
+def carry_saltation(dense, y, t, h, theta, t_ev, p, rate, onset, jump, y_new, n_base,
+                    n_vectors, work, buf):
+    """The tangent vectors at the end of a step whose point contact switched inside it.
+
+    The step integrated ``V' = J- V`` throughout (the Jacobian follows the
+    engine's flags, flipped only after the step); the vectors that cross the
+    event at ``t_ev = t + theta h`` are ``V(t + h) = Phi+(delta) S V(t_ev)``,
+    ``delta = (1 - theta) h``. ``V(t_ev)`` is the step's interpolant, S the
+    saltation matrix (:func:`saltation_tangent`, with ``rate`` and ``onset``,
+    where the force jumps: ``jump``; else the identity: the no-pull switch) and
+    ``Phi+(delta) = I + delta J+``, with ``J+`` the new side's Jacobian at the
+    event: an error of ``O(delta^2 |J|^2)``, where applying S at the step's end
+    would leave ``O(delta |J+ - J-|)`` (1e-7 of the monodromy for the pair model
+    at rtol 1e-12: delta ~ 1e-10, |J+ - J-| ~ k = 1000). Call it with the flags
+    already flipped. ``work`` and ``buf`` are workspaces of y's size; the vectors
+    of ``y_new`` are overwritten.
+    """
+    n = y.shape[0]
+    dense_eval(DENSE_ROWS, dense, y, h, theta, work)
+    if jump:
+        saltation_tangent(p, rate, onset, work, n_base, n_vectors, buf)
+    rhs_vectors(t_ev, work, p, buf)
+    delta = (1.0 - theta) * h
+    for i in range(n_base, n):
+        y_new[i] = work[i] + delta * buf[i]
 
 
 @kernel

@@ -1,10 +1,13 @@
 """Laws with memory or jumps in the tangent dynamics (docs/contact_laws.md section 7).
 
-A template (:mod:`.compose`), used only by a composition whose law has memory
-(``LAW_MEMORY``: hertzdamp, hunt-crossley) and carries tangent vectors. The
-law's damping coefficient ``xi = zeta / v0`` is set at every onset from the
-closing velocity ``v0 = V(t_e, x(t_e))`` at the end that touches first, and
-stays constant through the episode. A perturbation ``dx`` of the state moves
+A template (:mod:`.compose`), used only by a composition that carries tangent
+vectors and whose law has memory (``LAW_MEMORY``: hertzdamp, hunt-crossley,
+:func:`onset_tangent`) or whose point force jumps (``LAW_JUMPS`` on a point
+contact: kelvin-voigt, :func:`saltation_tangent`).
+
+**Memory.** The law's damping coefficient ``xi = zeta / v0`` is set at every
+onset from the closing velocity ``v0 = V(t_e, x(t_e))`` at the end that
+touches first, and stays constant through the episode. A perturbation ``dx`` of the state moves
 the onset (the root of the end's penetration ``d(t, x) = 0``) by
 ``dt_e = -dd / V`` (``d' = V`` there), so
 
@@ -18,12 +21,27 @@ the identity; what the onset adds is ``dxi``, one number per tangent vector
 (the law's block holds it, ``p[LAW_DXI + i]``), which then drives the
 variational equations through ``(df/dxi) dxi`` until the next onset
 (:func:`chaospound.engine.glue.rhs_tangent`).
+
+**Jumps.** Kelvin-Voigt's point force ``k d + c d'`` jumps by ``dF`` where d
+crosses 0 (``c d'`` at an onset, ``-c d'`` at a plain release), and the vector
+field by ``f+ - f- = dF e_F``, ``e_F`` the force's column of the model (the
+contact's generalised force per unit force). A tangent vector ``v`` is mapped
+by the saltation matrix
+
+    v -> v + (f+ - f-) (grad(d) . v) / d' = v + e_F s (grad(d) . v),   s = dF / d'
+
+(``d' = grad(d) . f- + dd/dt|explicit``: the closing rate, a moving wall
+included). That is the contact part of the model's Jacobian-vector product
+with a contact stiffness s and no damping, so the models need nothing new:
+``model_jvp(p, (s, 0, ...), v) - model_jvp(p, (0, ...), v)``.
 """
 
 from chaospound.kernels.free import (
     LAW,
     LAW_DXI,
     law_onset_sensitivity,
+    law_point_jump,
+    model_jvp,
     model_onset_accel,
     model_onset_variation,
     rhs,
@@ -62,3 +80,42 @@ def reset_tangent_memory(p, n_vectors):
     for i in range(n_vectors):
         p[LAW_DXI + i] = 0.0
 
+
+@kernel
+def saltation_tangent(p, rate, onset, y, n_base, n_vectors, w):
+    """Map each tangent vector across a jump of a point contact's force.
+
+    ``v += e_F s (grad(d) . v)`` with ``s = dF / d'`` from the law
+    (``law_point_jump``), computed as the difference of two Jacobian-vector
+    products of the model, with the contact linearisation ``(s, 0, ...)`` and
+    with none (the point models' :func:`model_linearize` returns ``(dF/dd,
+    dF/dd', 0, ...)``, nine values). Nothing changes where s = 0 (a continuous
+    release of the no-pull law).
+
+    Parameters
+    ----------
+    p : ndarray
+        Packed parameters.
+    rate : float
+        Closing rate d' at the event (units of A_g omega_Ax).
+    onset : bool
+        True at an onset (d becomes positive), False at a release.
+    y : ndarray
+        State followed by ``n_vectors`` tangent vectors of ``n_base`` values;
+        the vectors are changed in place.
+    w : ndarray
+        Workspace of at least ``2 n_base`` values.
+    """
+    s = law_point_jump(p, LAW, rate, onset)
+    if s == 0.0:
+        return
+    jump = (s, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    none = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    with_jump = w[:n_base]
+    without = w[n_base:2 * n_base]
+    for i in range(n_vectors):
+        a = n_base * (i + 1)
+        model_jvp(p, jump, y[a:a + n_base], with_jump)
+        model_jvp(p, none, y[a:a + n_base], without)
+        for c in range(n_base):
+            y[a + c] += with_jump[c] - without[c]

@@ -40,7 +40,7 @@ law_point_force = law_point_stiffness = law_point_force_rate = law_point_potenti
 law_line_force = law_line_gradient = law_line_force_rate = law_line_potential = _unbound
 law_on_onset = _unbound
 law_onset_sensitivity = law_point_memory_force = law_line_memory_force = _unbound
-law_on_sides = _unbound
+law_on_sides = law_point_jump = law_point_switch = law_on_switch = _unbound
 # ---- ground motion
 ground_at = ground_anchor = ground_shifted = ground_at_anchor = ground_next_kink = _unbound
 ground_acceleration = ground_at_y = _unbound
@@ -56,4 +56,4 @@ step = dense_prepare = controller = step_error = section_tangent = _unbound
 section_tangent_memory = _unbound
 # ---- defined by the engine templates, used by others
 rhs = rhs_grounded = end_value = locate_root = locate_extremum = _unbound
-onset_tangent = reset_tangent_memory = _unbound
+onset_tangent = reset_tangent_memory = saltation_tangent = rhs_vectors = _unbound

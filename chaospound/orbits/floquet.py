@@ -14,16 +14,20 @@ Which monodromy:
 
 * the variational ("propagator") engine by default: exact up to the
   integration tolerance;
-* a law whose tangent dynamics the engine refuses (per-episode memory:
-  hertzdamp, hunt_crossley; a force that jumps at onset: kelvin_voigt; a
-  point contact whose Jacobian is singular at onset) falls back on the
-  5-point finite-difference monodromy (:func:`finite_difference_monodromy`,
-  about 1e-8 relative), which differentiates the map itself and so includes
-  the jumps at onset that a saltation matrix would supply. For a law with
-  memory this holds only when no contact episode spans a section: the
-  memory (the onset velocity) is then rewritten by every run before it is
-  used; otherwise the map also depends on a memory that is not in the state,
-  and the report says so (``exact`` False, ``note``).
+* a composition whose tangent dynamics the engine refuses
+  (:func:`chaospound.engine.compose.check_tangent`: a point contact whose
+  Jacobian is singular at onset, Jankowski's on the wall and pair models; a
+  law with per-episode memory on a model that does not carry its
+  sensitivity) falls back on the 5-point finite-difference monodromy
+  (:func:`finite_difference_monodromy`, about 1e-8 relative), which
+  differentiates the map itself. The laws with memory (hertzdamp,
+  hunt_crossley) on the pounding models and Kelvin-Voigt's jumping force on
+  the point models (its saltation matrix) are variational. With the
+  finite difference and a law with memory the result holds only when no
+  contact episode spans a section: the memory (the onset velocity) is then
+  rewritten by every run before it is used; otherwise the map also depends
+  on a memory that is not in the state, and the report says so (``exact``
+  False, ``note``).
 
 The report says whether the orbit confirms the response: Newton converged
 near the start (within ``CONFIRM_DISTANCE`` of the state scale), with the

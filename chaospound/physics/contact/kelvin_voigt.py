@@ -28,9 +28,13 @@ Two variants, by the block's ``no_pull`` flag:
   reverses while the faces still overlap). No tensile force, but the measured e
   exceeds the target (docs/contact_laws.md gives the numbers).
 
-The force jumps at onset (``c v0``), hence ``JUMPS = True``. On a line contact
-the penetrated part and, with ``no_pull``, the part where ``k d + c r > 0`` are
-both half-lines in y (d and r are linear), so the resultants are closed forms:
+The force jumps at onset (``c v0``), hence ``JUMPS = True``: on a point
+contact the engine maps the tangent vectors there by the saltation matrix, from
+:func:`point_jump`, and in a tangent run lands on the no-pull switch ``k d + c
+d' = 0``, :func:`point_switch` (docs/contact_laws.md section 7). On a line
+contact the penetrated part and, with ``no_pull``, the part where ``k d + c r >
+0`` are both half-lines in y (d and r are linear), so the resultants are closed
+forms:
 the plain law through the moments of :mod:`.moments` with j = 1 and j = 0
 (``M0(0)`` is the penetrated fraction), the clipped law by integrating the
 linear ``k d + c r`` over the intersection.
@@ -56,12 +60,15 @@ from chaospound.physics.contact.moments import force_moments, moments
 NAME = "kelvin-voigt"
 #: the law's block, in order; the slot ``no_pull`` holds mode bits: bit 0 is the
 #: no-pull flag (0 or 1 from :func:`block`), bits 1-3 the engine's contact flags of the
-#: line's ends (:func:`on_sides`; 0 until an engine writes them)
+#: ends (:func:`on_sides`), bits 4-5 its no-pull switch flag of a point contact in a
+#: tangent run (:func:`on_switch`); 0 until an engine writes them
 PARAMETERS = ("k", "c", "no_pull")
 NO_PULL = 1  #: bit of the ``no_pull`` slot: clip the force at 0
 SIDES_KNOWN = 2  #: bit: the engine wrote its contact flags (the next two bits)
 SIDE_LO = 4  #: bit: the engine counts the y_lo end in contact
 SIDE_HI = 8  #: bit: the engine counts the y_hi end in contact
+SWITCH_KNOWN = 16  #: bit: the engine wrote its no-pull switch flag (the next bit)
+CLIPPED = 32  #: bit: the engine counts a point contact's no-pull force clipped (g < 0)
 MEMORY = ()  #: no per-episode memory
 CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part's
 DISSIPATIVE = True  #: the force depends on the penetration rate
@@ -123,6 +130,34 @@ def on_sides(p, base, inside_lo, inside_hi):
     p[base + 2] = float(bits)
 
 
+@kernel
+def point_switch(p, base, d, rate):
+    """The no-pull law's switch function ``g = k d + c d'`` of a point contact.
+
+    In contact the force is clipped where g < 0; its Jacobian jumps from ``(k,
+    c)`` to 0 on g = 0 (the force does not: no saltation), so a tangent run lands
+    its steps there as on a crossing (chaospound/engine/loop.py). Units of A_g
+    K_Ax; 1.0 for the plain law (no switch).
+    """
+    if not _no_pull(p, base):
+        return 1.0
+    return p[base] * d + p[base + 1] * rate
+
+
+@kernel
+def on_switch(p, base, clipped):
+    """Record whether the engine counts the point contact's no-pull force clipped.
+
+    Bits 4 and 5 of the ``no_pull`` slot (the others kept); :func:`on_sides`
+    clears them, so only a run that writes them (a tangent run on a point
+    contact) has them, and :func:`point_stiffness` follows them there.
+    """
+    bits = (int(p[base + 2]) & ~(SWITCH_KNOWN | CLIPPED)) | SWITCH_KNOWN
+    if clipped:
+        bits |= CLIPPED
+    p[base + 2] = float(bits)
+
+
 @inline
 def _no_pull(p, base):
     """The ``no_pull`` flag (bit 0 of its slot)."""
@@ -142,12 +177,68 @@ def point_force(p, base, d, rate):
 
 @inline
 def point_stiffness(p, base, d, rate):
-    """``(dF/dd, dF/drate)`` of :func:`point_force` (0 where clipped)."""
-    if d <= 0.0:
+    """``(dF/dd, dF/drate)`` of :func:`point_force` (0 where clipped), units of K_Ax
+    and K_Ax / omega_Ax.
+
+    In contact where the engine's flag says so (:func:`on_sides`; a point contact
+    has one end, both flags equal), else where d > 0 (a block no engine has run);
+    with no_pull, clipped where the engine's switch flag says so
+    (:func:`on_switch`), else where ``k d + c d' < 0``: the variational equations
+    need the one-sided Jacobian on each side of an onset, a release or the
+    no-pull switch at every stage, and a landed state is a rounding error from
+    the surface on either side (docs/contact_laws.md section 7). The force
+    itself (:func:`point_force`) follows the signs of d and of ``k d + c d'``.
+    """
+    bits = int(p[base + 2])
+    inside = d > 0.0
+    if bits & SIDES_KNOWN:
+        inside = (bits & SIDE_LO) != 0
+    if not inside:
         return 0.0, 0.0
-    if _no_pull(p, base) and p[base] * d + p[base + 1] * rate < 0.0:
-        return 0.0, 0.0
+    if bits & NO_PULL:
+        clipped = p[base] * d + p[base + 1] * rate < 0.0
+        if bits & SWITCH_KNOWN:
+            clipped = (bits & CLIPPED) != 0
+        if clipped:
+            return 0.0, 0.0
     return p[base], p[base + 1]
+
+
+@kernel
+def point_jump(p, base, rate, onset):
+    """The point force's jump where d crosses 0, divided by the closing rate.
+
+    The saltation matrix of a point contact (docs/contact_laws.md section 7) is
+    ``I + (f+ - f-) grad(d)^T / d'``, and ``f+ - f-`` is the jump ``dF`` of the
+    force times its column of the vector field, so the engine needs
+    ``dF / d'``, a contact stiffness (:func:`chaospound.engine.memory.saltation_tangent`).
+    Just inside, at d = 0, the force is ``c d'`` (``max(c d', 0)`` with no_pull), so
+
+    * onset (``onset`` True, d' >= 0): ``dF = c d'``, returns ``c``;
+    * plain release (d' <= 0): ``dF = -c d'``, returns ``-c``;
+    * no_pull release: ``k d + c d' = c d' < 0`` is clipped, F is already 0: returns 0
+      (the clipped law's release is continuous); likewise an onset at d' < 0.
+
+    Parameters
+    ----------
+    p : ndarray
+        Packed parameters; the block is ``(k, c, no_pull)`` from ``p[base]``.
+    base : int
+        First slot of the law's block.
+    rate : float
+        Closing rate d' at the event, units of A_g omega_Ax (only its sign matters).
+    onset : bool
+        True where d becomes positive, False where it becomes negative.
+
+    Returns
+    -------
+    float
+        ``dF / d'``, units of K_Ax / omega_Ax (finite at a graze, d' -> 0).
+    """
+    c = p[base + 1]
+    if _no_pull(p, base) and (rate < 0.0 if onset else rate <= 0.0):
+        return 0.0
+    return c if onset else -c
 
 
 @kernel

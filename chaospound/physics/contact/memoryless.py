@@ -2,11 +2,12 @@
 
 A composition binds ``law_onset_sensitivity``, ``law_point_memory_force`` and
 ``law_line_memory_force`` from the law's module when the law has ``MEMORY``
-(:mod:`.hertzdamp`, :mod:`.hunt_crossley`), and ``law_on_sides`` when it
-``JUMPS`` (:mod:`.kelvin_voigt`), else from here: the engine calls them only
-when ``LAW_MEMORY`` (``LAW_JUMPS``) is on, so these are never reached; they
-exist so that every composition's text resolves the same names
-(docs/contact_laws.md section 7).
+(:mod:`.hertzdamp`, :mod:`.hunt_crossley`), and ``law_on_sides``,
+``law_point_jump``, ``law_point_switch`` and ``law_on_switch`` when it ``JUMPS``
+(:mod:`.kelvin_voigt`), else from here: the engine calls them only when
+``LAW_MEMORY`` (``LAW_JUMPS``) is on, so these are never reached; they exist so
+that every composition's text resolves the same names (docs/contact_laws.md
+section 7).
 """
 
 from chaospound.kernels.jit import inline, kernel
@@ -35,4 +36,22 @@ def line_memory_force(p, base, d_c, slope, rate_c, rate_slope, half_length):
 @kernel
 def on_sides(p, base, inside_lo, inside_hi):
     """Nothing to record: the law's Jacobian does not jump where an end crosses."""
+    return
+
+
+@kernel
+def point_jump(p, base, rate, onset):
+    """0: the point force is continuous where d crosses 0 (no saltation)."""
+    return 0.0
+
+
+@kernel
+def point_switch(p, base, d, rate):
+    """1.0: no switch surface in contact."""
+    return 1.0
+
+
+@kernel
+def on_switch(p, base, clipped):
+    """Nothing to record: no switch surface."""
     return
