@@ -264,3 +264,28 @@ def test_cli_lyapunov_with_memory_on_a_line_contact(capsys):
     assert code == 0, err
     document = json.loads(out)
     assert len(document["exponents"]) == 2 and "two_trajectory" in document
+
+
+def test_contact_damping_lowers_the_exponent_sum_below_the_structural_trace(capsys):
+    """The sum of all exponents is the orbit's mean trace of the Jacobian. With an elastic
+    law that is the constant structural trace; hertzdamp's contact damping adds
+    -mu dF/dd' < 0 during every impact, so its sum lies below, and no constant trace is
+    claimed (the CLI says so instead of reporting a spurious difference)."""
+    from chaospound.cli import main
+
+    elastic = System.from_scene(load_preset("tower-wall"))
+    damped = System.from_scene(load_preset("tower-wall").with_params(
+        contact_law="hertzdamp", restitution=0.5))
+    structural = float(elastic.engine("qr").module.model_trace(elastic.params))
+    assert float(damped.engine("qr").module.model_trace(damped.params)) == structural
+    settings = dict(transient=20, tangent_transient=5, cycles=60, n_blocks=3)
+    hertz = lyapunov_spectrum(elastic, **settings)
+    assert float(np.sum(hertz.exponents)) == pytest.approx(structural, rel=1e-4)
+    spectrum = lyapunov_spectrum(damped, **settings)
+    assert math.isnan(spectrum.trace)
+    assert float(np.sum(spectrum.exponents)) < structural - 0.1
+    code = main(["lyapunov", "--preset", "tower-wall", "--set", "contact_law=hertzdamp",
+                 *SHORT, "--k", "6"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "not constant along the orbit" in out and "difference" not in out

@@ -328,7 +328,8 @@ def _lyapunov_report(scene, system, spectrum, document: dict, plot: str | None) 
         rows = [(*row, f"{floquet['exponents'][i]:+.7f}") for i, row in enumerate(rows)]
     total, trace = document["sum"], document["trace"]
     if trace is None or (isinstance(trace, float) and math.isnan(trace)):
-        identity = f"{total:.6g} (no trace identity: the Jacobian's trace is not known)"
+        identity = (f"{total:.6g} (no trace identity: the Jacobian's trace is not constant "
+                    "along the orbit)")
     elif document["full_spectrum"]:
         identity = f"{total:.6g} (trace identity {trace:.6g}, difference {total - trace:.2g})"
     else:

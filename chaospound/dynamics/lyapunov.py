@@ -56,8 +56,9 @@ class Spectrum:
         Periods discarded before the tangent vectors start, periods discarded
         while they align, and periods averaged.
     trace : float
-        Mean trace of the Jacobian (constant for the built-in models; NaN for a
-        custom system, whose trace varies along the orbit): the sum of
+        Mean trace of the Jacobian (constant for the built-in models with an
+        elastic contact law; NaN for a custom system or a dissipative law, whose
+        trace varies along the orbit): the sum of
         all exponents must equal it.
     steps, rhs_evals : int
         Work of the tangent run.
@@ -192,8 +193,13 @@ def lyapunov_spectrum(
 
 
 def _constant_trace(system: System) -> float:
-    """Trace of the Jacobian of a built-in model (constant); NaN for a custom system."""
+    """Trace of the Jacobian of a built-in model with an elastic contact law (constant);
+    NaN for a custom system and for a dissipative law, whose contact damping adds
+    ``-mu dF/dd'`` to the trace during every contact episode, so that the trace varies
+    along the orbit."""
     if system.model_id == CUSTOM:
+        return float("nan")
+    if system.engine().module.LAW_DISSIPATIVE:
         return float("nan")
     return float(system.engine().module.model_trace(system.params))
 
