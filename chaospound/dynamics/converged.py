@@ -355,12 +355,7 @@ class _Classifier:
     def _exponent_stage(self) -> ConvergedResult | None:
         """Step 4 (and 5 when the exponent cannot decide)."""
         n = self.flow.dim
-        augmented = np.zeros(2 * n)
-        augmented[:n] = self._last()
-        augmented[n] = 1.0
-        align = np.zeros((0, 1))
-        augmented, _, _ = advance(self.flow, augmented, TANGENT_ALIGN, tangent="qr",
-                                  tangent_log=align, record_from=TANGENT_ALIGN)
+        augmented = self._aligned_tangent(self._last())
         blocks: list[float] = []
         augmented, ran, lam, err, z = self._blocks(augmented, blocks, EXPONENT_CAP)
         ran += TANGENT_ALIGN
@@ -445,36 +440,45 @@ class _Classifier:
             self.evidence["exponent_stages"][-1]["decision"] = (
                 f"sections settled to period {settled} during the 0-1 record")
             return None
-        imp = record.impacts
-        phase = _phase_from_section(imp.time, imp.cycle, record.period, self.section_phase)
-        regime = classify_sequence(record.strobe.state * self.weights, imp.cycle, phase,
-                                   imp.velocity, imp.labels, max_period=self.max_period,
-                                   tol=self.tol, exponent=lam, exponent_error=err,
-                                   test01=True)
+        regime = self._read_record(record, lam, err)
         self.evidence["decided_by"] = "exponent and 0-1 test"
         if regime.regime == "unresolved" and self.cycles < self.max_transient:
             # the two disagree: near the 3-sigma line a run of EXPONENT_CAP cycles
             # decides by chance, so the exponent goes on from the record's end for up to
             # LONGER_RUN times as long in all, as classify's rerun does, and decides anew
-            regime, lam, err = self._longer_exponent(record, blocks, regime)
+            lam, err = self._longer_exponent(record, blocks)
+            regime = self._read_record(record, lam, err)
         if regime.regime == "unresolved":
             k = regime.zero_one
             self.evidence["why"] = (
                 f"exponent {lam:+.3g} +- {err:.2g} within {Z_EARLY:g} sigma after "
-                f"{EXPONENT_CAP} cycles and 0-1 test K = "
+                f"{BLOCK * len(blocks)} cycles and 0-1 test K = "
                 + ("n/a" if k is None else f"{k:.2f}") + " do not agree on a regime")
         return self._result(regime, record, confidence=regime.confidence,
                             window=ZERO_ONE_CYCLES)
 
-    def _longer_exponent(self, record, blocks: list[float], regime: Regime):
-        """More exponent blocks from the end of the 0-1 record, then the record read
-        again with the longer exponent. Returns ``(regime, lambda, sigma)``."""
+    def _read_record(self, record, lam: float, err: float) -> Regime:
+        """Rule 6 on a record of sections and impacts, with the exponent and the 0-1 test."""
+        imp = record.impacts
+        phase = _phase_from_section(imp.time, imp.cycle, record.period, self.section_phase)
+        return classify_sequence(record.strobe.state * self.weights, imp.cycle, phase,
+                                 imp.velocity, imp.labels, max_period=self.max_period,
+                                 tol=self.tol, exponent=lam, exponent_error=err, test01=True)
+
+    def _aligned_tangent(self, state) -> np.ndarray:
+        """State and one tangent vector, aligned over ``TANGENT_ALIGN`` cycles from ``state``."""
         n = self.flow.dim
         augmented = np.zeros(2 * n)
-        augmented[:n] = record.strobe.state[-1]
+        augmented[:n] = state
         augmented[n] = 1.0
         augmented, _, _ = advance(self.flow, augmented, TANGENT_ALIGN, tangent="qr",
                                   tangent_log=np.zeros((0, 1)), record_from=TANGENT_ALIGN)
+        return augmented
+
+    def _longer_exponent(self, record, blocks: list[float]) -> tuple[float, float]:
+        """More exponent blocks (appended to ``blocks``) from the end of the 0-1 record.
+        Returns ``(lambda, sigma)`` over all the blocks."""
+        augmented = self._aligned_tangent(record.strobe.state[-1])
         before = len(blocks)
         _, ran, lam, err, z = self._blocks(augmented, blocks,
                                            (LONGER_RUN - 1) * EXPONENT_CAP)
@@ -483,13 +487,7 @@ class _Classifier:
             "cycles": ran, "blocks": len(blocks) - before, "exponent": lam, "error": err,
             "exponent_over_error": z,
             "decision": "exponent and 0-1 test disagreed: the exponent went on"})
-        imp = record.impacts
-        phase = _phase_from_section(imp.time, imp.cycle, record.period, self.section_phase)
-        regime = classify_sequence(record.strobe.state * self.weights, imp.cycle, phase,
-                                   imp.velocity, imp.labels, max_period=self.max_period,
-                                   tol=self.tol, exponent=lam, exponent_error=err,
-                                   test01=True)
-        return regime, lam, err
+        return lam, err
 
     # ------------------------------------------------------------- results
     def _result(self, regime: Regime, record, *, confidence: float,
