@@ -827,8 +827,49 @@ def _init_worker(scene: Scene, spec: SweepSpec, parent: int) -> None:
     # (it terminates the workers), so that workers print no tracebacks
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_parent(parent)
+    single_thread_blas()
     _WORKER["scene"] = scene
     _WORKER["spec"] = spec
+
+
+#: the OpenBLAS builds numpy and scipy bundle name their thread setter one of these
+_BLAS_SET_THREADS = ("openblas_set_num_threads", "openblas_set_num_threads64_",
+                     "scipy_openblas_set_num_threads", "scipy_openblas_set_num_threads64_")
+
+
+def single_thread_blas() -> list[str]:
+    """Give every OpenBLAS loaded in this process (a sweep worker) one thread.
+
+    numpy and scipy each load their own OpenBLAS with a thread per core. A worker's
+    Newton steps and Floquet multipliers call it on 12 x 12 matrices, and its idle
+    threads spin on the cores the other workers need: fig4's 1000-point scan took
+    29.4 s on 2 workers instead of 22.8 s (`docs/classification.md`). The libraries
+    are found in ``/proc/self/maps`` (Linux; elsewhere, and for processes started
+    afresh, the ``*_NUM_THREADS`` variables set here apply). Returns the libraries set.
+    """
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[name] = "1"
+    try:
+        with open("/proc/self/maps") as fh:
+            paths = sorted({line.split()[-1] for line in fh
+                            if "openblas" in line.rsplit("/", 1)[-1].lower()})
+    except OSError:
+        return []
+    done = []
+    import ctypes
+
+    for path in paths:
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError:
+            continue
+        for symbol in _BLAS_SET_THREADS:
+            setter = getattr(lib, symbol, None)
+            if setter is not None:
+                setter(1)
+                done.append(path)
+                break
+    return done
 
 
 def die_with_parent(parent: int) -> None:

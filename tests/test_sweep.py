@@ -28,6 +28,7 @@ import resource
 import signal
 import subprocess
 import sys
+import textwrap
 import time
 import tracemalloc
 from pathlib import Path
@@ -586,3 +587,28 @@ def test_resident_memory_of_a_long_sweep(tmp_path):
     short = peak_rss_after(2000)
     long = peak_rss_after(20000)
     assert long - short < 20_000, f"{short} kB -> {long} kB"
+
+
+def test_sweep_workers_run_one_blas_thread():
+    """A worker's idle OpenBLAS threads spin on the cores the other workers need: the
+    worker initialiser gives every OpenBLAS loaded (numpy's and scipy's) one thread. Checked
+    in a fresh interpreter through each library's own thread getter."""
+    code = textwrap.dedent("""
+        import ctypes, numpy, scipy.linalg
+        from chaospound.sweep import single_thread_blas
+        done = single_thread_blas()
+        assert done, "no OpenBLAS found"
+        for path in done:
+            lib = ctypes.CDLL(path)
+            getters = [getattr(lib, s.replace("set", "get"), None)
+                       for s in ("openblas_set_num_threads", "openblas_set_num_threads64_",
+                                 "scipy_openblas_set_num_threads",
+                                 "scipy_openblas_set_num_threads64_")]
+            counts = [g() for g in getters if g is not None]
+            assert counts == [1], (path, counts)
+        print(len(done))
+    """)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert int(proc.stdout) >= 1
