@@ -1461,7 +1461,8 @@ statistics barely change.
 Other studies: [contact_laws.md](contact_laws.md): the Fig. 4 spectrum and its \
 chaotic share under damped contact laws (hertzdamp, jankowski at e = 0.65, 0.5), \
 and peak impact forces over 50 stochastic records \
-(`analysis/contact_laws_study.py`).
+(`analysis/contact_laws_study.py`); [map200/](map200/README.md): a 200 x 200 \
+(gap, T/T_Ax) regime and exponent map of fig4 by the default sweep.
 """
 
 
