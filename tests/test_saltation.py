@@ -109,6 +109,7 @@ def test_cli_lyapunov_on_the_wall_with_kelvin_voigt(capsys):
     from chaospound.cli import main
 
     argv = ["lyapunov", "--preset", "wall", "--set", "contact_law=kelvin-voigt",
+            "--set", "method=dop853",  # the engines the tests above compiled
             "--transient", "5", "--record", "2", "--cycles", "10"]
     assert main(argv) == 0
     out, err = capsys.readouterr()
