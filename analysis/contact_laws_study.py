@@ -34,7 +34,6 @@ The sweeps' HDF5 files go to a scratch folder (``--scratch``), not to results/.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import multiprocessing as mp
@@ -50,6 +49,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
+from reproduce_paper import write_rows  # the same CSV layout as the paper's tables
 
 from chaospound import load_preset, load_scene, open_sweep, run_sweep, simulate
 from chaospound import plot as cplot
@@ -206,18 +206,6 @@ def jsonable(obj):
     if isinstance(obj, np.ndarray):
         return jsonable(obj.tolist())
     return obj
-
-
-def write_rows(path: Path, rows: list[dict]) -> None:
-    if not rows:
-        path.write_text("")
-        return
-    with path.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v)
-                             for k, v in row.items()})
 
 
 def pool_map(fn, tasks: list, workers: int) -> list:
