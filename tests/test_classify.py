@@ -24,6 +24,7 @@ from chaospound.dynamics.classify import (
     Regime,
     classify,
     classify_sequence,
+    mean_square_displacement,
     zero_one_test,
 )
 from chaospound.dynamics.system import System, duffing
@@ -204,6 +205,25 @@ def test_zero_one_is_reproducible_and_accepts_explicit_c():
     assert zero_one_test(x, c_values=[1.0, 1.7, 2.3]) > 0.8
     with pytest.raises(ValueError, match="at least 20"):
         zero_one_test(x[:10])
+
+
+@pytest.mark.parametrize("signal", ["chaotic", "offset noise", "quasi-periodic"])
+def test_mean_square_displacement_by_fft_is_the_direct_sum(signal):
+    """The 0-1 test's M_c(n) by prefix sums and an FFT autocorrelation equals the
+    definition, mean_j |z(j + n) - z(j)|^2 summed directly, to 1e-12 of its size:
+    also where |z| grows like sqrt(N) (chaos) or a mean makes it oscillate."""
+    rng = np.random.default_rng(4)
+    k = np.arange(1000)
+    phi = {"chaotic": logistic(1000), "offset noise": 5.0 + rng.normal(size=1000),
+           "quasi-periodic": np.cos(2 * np.pi * GOLDEN * k)}[signal]
+    c = rng.uniform(math.pi / 5, 4 * math.pi / 5, size=30)
+    z = np.cumsum(phi[None, :] * np.exp(1j * np.outer(c, k + 1)), axis=1)
+    direct = np.array([[np.mean(np.abs(row[n:] - row[:-n]) ** 2) for n in range(1, 101)]
+                       for row in z])
+    fast = mean_square_displacement(z, 100)
+    assert fast.shape == (30, 100)
+    scale = np.max(np.abs(direct), axis=1, keepdims=True)
+    assert np.max(np.abs(fast - direct) / scale) < 1e-12
 
 
 # ============================================================ scenes: physics
