@@ -1,4 +1,4 @@
-"""Tangent dynamics of the laws with memory and jumps, measured: results/contact_tangent.*
+"""Tangent dynamics of the laws with memory, jumps and shifts, measured: results/contact_tangent.*
 
 For each case, the engine's propagator monodromy of one period against a
 4th-order central difference of its stroboscopic map (the helpers of
@@ -9,12 +9,14 @@ against the two-trajectory estimate; and Kelvin-Voigt's saltation on the point
 models (tests/test_saltation.py, its cases and helpers): on the periodic
 orbits, the propagator monodromy against the orbit solver's 5-point finite
 difference and the QR exponent against ``log |mu_1| / T``, on the chaotic pair
-the QR exponent against the two-trajectory estimate. docs/contact_laws.md
-section 7 quotes it.
+the QR exponent against the two-trajectory estimate; and Jankowski's shifted
+approach phase on the point models (tests/test_jankowski_tangent.py, the same
+checks on its orbits, two of them sectioned inside an approach).
+docs/contact_laws.md section 7 quotes it.
 
 Usage::
 
-    python analysis/contact_tangent.py            # results/contact_tangent.{md,json}, ~15 min
+    python analysis/contact_tangent.py            # results/contact_tangent.{md,json}, ~20 min
     python analysis/contact_tangent.py --out DIR  # elsewhere
 """
 
@@ -37,7 +39,8 @@ MONODROMY = (("tower-wall", "hertzdamp", 1e-12, {}), ("tower-wall", "hunt-crossl
              ("fig3a", "kelvin-voigt", 1e-10, {}), ("wall", "kelvin-voigt", 1e-12, {}),
              ("wall", "kelvin-voigt", 1e-12, {"no_pull": True}),
              ("fig4-translational", "kelvin-voigt", 1e-12, {}),
-             ("fig4-translational", "kelvin-voigt", 1e-12, {"no_pull": True}))
+             ("fig4-translational", "kelvin-voigt", 1e-12, {"no_pull": True}),
+             ("wall", "jankowski", 1e-12, {}), ("fig4-translational", "jankowski", 1e-12, {}))
 CHAOTIC = ("hertzdamp", "hunt-crossley", "kelvin-voigt")
 
 
@@ -55,36 +58,42 @@ def _label(law: str, values: dict) -> str:
     return law + (" no-pull" if values.get("no_pull") else "")
 
 
-def _saltation() -> dict:
-    """The measurements of tests/test_saltation.py (Kelvin-Voigt on the point models)."""
+def _orbit_row(scene, label: str, values: dict) -> dict:
+    """One periodic orbit's checks: the propagator monodromy against the orbit solver's
+    5-point finite difference (Newton on it), the QR exponent against log |mu_1| / T."""
     import math
     from dataclasses import replace
 
-    from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
+    from chaospound.dynamics.lyapunov import lyapunov_spectrum
     from chaospound.dynamics.system import System
     from chaospound.orbits import StroboscopicMap, find_orbit, finite_difference_monodromy
     from chaospound.orbits.maps import variational_monodromy
 
+    smap = replace(StroboscopicMap.of(scene, monodromy_provider=finite_difference_monodromy),
+                   jacobian_rtol=None)
+    orbit = find_orbit(smap, transient=60)
+    _, matrix = variational_monodromy(smap, orbit.state, 1)
+    error = np.max(np.abs(matrix - orbit.monodromy)) / np.max(np.abs(orbit.monodromy))
+    expected = math.log(abs(orbit.multipliers[0])) / smap.system.period
+    system = System.from_scene(scene.with_params(method="dop853", rtol=1e-11, atol=1e-13))
+    qr = lyapunov_spectrum(system, k=1, transient=0, tangent_transient=20, cycles=60,
+                           n_blocks=6, initial_state=orbit.state)
+    row = {"case": label, **values, "impacts_per_period": orbit.impacts_per_period,
+           "multipliers_abs": [float(abs(z)) for z in orbit.multipliers],
+           "relative_error": float(error), "log_mu_over_T": expected,
+           "qr": float(qr.exponents[0]), "qr_error": float(qr.errors[0])}
+    print(row, flush=True)
+    return row
+
+
+def _saltation() -> dict:
+    """The measurements of tests/test_saltation.py (Kelvin-Voigt on the point models)."""
+    from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
+
     cases = _cases("test_saltation")
-    orbits = []
-    for (preset, ratio, no_pull), label in zip(cases.ORBITS, cases.IDS, strict=True):
-        smap = replace(StroboscopicMap.of(cases._scene(preset, ratio, no_pull),
-                                          monodromy_provider=finite_difference_monodromy),
-                       jacobian_rtol=None)
-        orbit = find_orbit(smap, transient=60)
-        _, matrix = variational_monodromy(smap, orbit.state, 1)
-        error = np.max(np.abs(matrix - orbit.monodromy)) / np.max(np.abs(orbit.monodromy))
-        expected = math.log(abs(orbit.multipliers[0])) / smap.system.period
-        system = System.from_scene(cases._scene(preset, ratio, no_pull).with_params(
-            method="dop853", rtol=1e-11, atol=1e-13))
-        qr = lyapunov_spectrum(system, k=1, transient=0, tangent_transient=20, cycles=60,
-                               n_blocks=6, initial_state=orbit.state)
-        orbits.append({"case": label, "period_ratio": ratio, "no_pull": no_pull,
-                       "impacts_per_period": orbit.impacts_per_period,
-                       "multipliers_abs": [float(abs(z)) for z in orbit.multipliers],
-                       "relative_error": float(error), "log_mu_over_T": expected,
-                       "qr": float(qr.exponents[0]), "qr_error": float(qr.errors[0])})
-        print(orbits[-1], flush=True)
+    orbits = [_orbit_row(cases._scene(preset, ratio, no_pull), label,
+                         {"period_ratio": ratio, "no_pull": no_pull})
+              for (preset, ratio, no_pull), label in zip(cases.ORBITS, cases.IDS, strict=True)]
     chaos = []
     for ratio, e, no_pull in ((1.25, 0.65, False), (1.24, 0.8, True)):
         scene = cases._scene("fig4-translational", ratio, no_pull, e).with_params(
@@ -95,6 +104,24 @@ def _saltation() -> dict:
                       "qr": float(qr.exponents[0]), "qr_error": float(qr.errors[0]),
                       "two": two.exponent, "two_error": two.error})
         print(chaos[-1], flush=True)
+    return {"orbits": orbits, "chaotic_pair": chaos}
+
+
+def _jankowski() -> dict:
+    """The measurements of tests/test_jankowski_tangent.py (its shifted approach phase)."""
+    from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
+
+    cases = _cases("test_jankowski_tangent")
+    orbits = [_orbit_row(cases._scene(preset, ratio, phase), label,
+                         {"period_ratio": ratio, "phase": phase})
+              for (preset, ratio, phase), label in zip(cases.ORBITS, cases.IDS, strict=True)]
+    scene = cases._scene("fig4-translational", 1.25).with_params(method="dop853", rtol=1e-10,
+                                                                  atol=1e-12)
+    qr = lyapunov_spectrum(scene, k=1, cycles=1000, transient=100)
+    two = largest_exponent_two_trajectory(scene, cycles=1000, transient=100)
+    chaos = {"period_ratio": 1.25, "restitution": 0.65, "qr": float(qr.exponents[0]),
+             "qr_error": float(qr.errors[0]), "two": two.exponent, "two_error": two.error}
+    print(chaos, flush=True)
     return {"orbits": orbits, "chaotic_pair": chaos}
 
 
@@ -130,12 +157,13 @@ def main(argv: list[str] | None = None) -> int:
                       "two": two.exponent, "two_error": two.error})
         print(chaos[-1], flush=True)
     saltation = _saltation()
+    shifted = _jankowski()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "contact_tangent.json").write_text(json.dumps(
-        {"monodromy": rows, "chaotic_fig4_0.9": chaos, "saltation": saltation},
-        indent=1) + "\n")
-    lines = ["# Tangent dynamics of the laws with memory and jumps", "",
+        {"monodromy": rows, "chaotic_fig4_0.9": chaos, "saltation": saltation,
+         "jankowski_point": shifted}, indent=1) + "\n")
+    lines = ["# Tangent dynamics of the laws with memory, jumps and shifts", "",
              "Generated by `python analysis/contact_tangent.py`.", "",
              "| model | law | rtol | monodromy vs central differences (relative) |",
              "|---|---|---|---|"]
@@ -160,6 +188,23 @@ def main(argv: list[str] | None = None) -> int:
     lines += [f"| {c['period_ratio']:g} | {c['restitution']:g} | {c['no_pull']} | "
               f"{c['qr']:.4f} +- {c['qr_error']:.4f} | {c['two']:.4f} +- {c['two_error']:.4f} |"
               for c in saltation["chaotic_pair"]]
+    lines += ["", "Jankowski on the point models (the approach phase's tangent vectors shifted), "
+              "e = 0.65, on stable period-1 orbits sectioned at the phase given "
+              "(tests/test_jankowski_tangent.py; 0.312 and 0.111 fall inside an approach), "
+              "the same checks:", "",
+              "| model | T/T_Ax | phase | impacts | abs(mu) | monodromy vs finite differences "
+              "(relative) | QR lambda_1 | log abs(mu_1) / T |",
+              "|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {o['case']} | {o['period_ratio']:g} | {o['phase']:g} | "
+              f"{o['impacts_per_period']} | "
+              + ", ".join(f"{m:.4f}" for m in o["multipliers_abs"])
+              + f" | {o['relative_error']:.2g} | {o['qr']:.5f} +- {o['qr_error']:.2g} | "
+              f"{o['log_mu_over_T']:.5f} |" for o in shifted["orbits"]]
+    c = shifted["chaotic_pair"]
+    lines += ["", f"Chaotic pair with Jankowski (fig4-translational, T/T_Ax = "
+              f"{c['period_ratio']:g}, e = {c['restitution']:g}), 100 + 1000 cycles, rtol "
+              f"1e-10: QR lambda_1 = {c['qr']:.4f} +- {c['qr_error']:.4f}, two trajectories "
+              f"{c['two']:.4f} +- {c['two_error']:.4f}."]
     (out / "contact_tangent.md").write_text("\n".join(lines) + "\n")
     return 0
 

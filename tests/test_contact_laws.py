@@ -199,7 +199,7 @@ def _reference_law(name: str, p: np.ndarray):
             return max(g, mpmath.mpf(0)) if no_pull else g
         return f
     if name == "jankowski":
-        beta, chi, c_s = values
+        beta, chi, c_s, _ = values  # (the last: the engine's phase flags of a tangent run)
 
         def f(d, r):
             if d <= 0:

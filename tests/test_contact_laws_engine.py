@@ -113,17 +113,26 @@ def test_dissipation_lowers_the_rebound():
     assert rebound[0] > rebound[1] > rebound[2]
 
 
-def test_tangent_dynamics_are_refused_where_they_would_be_wrong():
-    """Jankowski's point Jacobian is singular at onset: refused on the point models
-    (the laws with memory are exact there, tests/test_contact_tangent.py, and so is
-    Kelvin-Voigt's jumping force, with its saltation matrix, tests/test_saltation.py)."""
-    from chaospound.engine.compose import Composition, check_tangent
+def test_tangent_dynamics_are_composed_for_every_law_on_the_point_models():
+    """Every law's tangent dynamics on the point models: the laws with memory carry its
+    sensitivity (tests/test_contact_tangent.py), Kelvin-Voigt's jumping force its
+    saltation matrix (tests/test_saltation.py) and Jankowski's singular Jacobian the
+    approach phase's shift (tests/test_jankowski_tangent.py), which only its point
+    tangent compositions compile; a model that does not carry a law's memory is refused."""
+    from chaospound.engine.compose import Composition, check_tangent, generate_source
 
     for model in ("wall", "pair"):
-        with pytest.raises(ValueError, match="not available"):
-            check_tangent(Composition(model, "jankowski", tangent="qr"))
-        for law in ("kelvin-voigt", "hertzdamp", "hunt-crossley"):
+        for law in ("jankowski", "kelvin-voigt", "hertzdamp", "hunt-crossley"):
             check_tangent(Composition(model, law, tangent="propagator"))
+        assert "LAW_SHIFTED = True" in generate_source(Composition(model, "jankowski",
+                                                                   tangent="qr"))
+        assert "LAW_SHIFTED = False" in generate_source(Composition(model, "jankowski"))
+        assert "LAW_SHIFTED = False" in generate_source(Composition(model, "kelvin-voigt",
+                                                                    tangent="qr"))
+    assert "LAW_SHIFTED = False" in generate_source(Composition("towers", "jankowski",
+                                                                tangent="qr"))
+    with pytest.raises(ValueError, match="not available"):
+        check_tangent(Composition("lorenz", "hertzdamp", tangent="qr"))
 
 
 def test_a_law_rejects_an_impossible_restitution():

@@ -225,6 +225,7 @@ def _lyapunov_document(scene, system, spectrum, wall, two, two_system, two_wall)
     document = {
         "model": system.model_name,
         "state_dim": system.dim,
+        "qr": {"available": True},  # (where refused: False and the reason, two trajectories)
         "k": int(spectrum.exponents.size),
         "full_spectrum": bool(spectrum.exponents.size == system.dim),
         "period": spectrum.period,

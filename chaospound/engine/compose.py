@@ -265,8 +265,14 @@ def _bindings(c: Composition) -> str:
     lines.append(f"from {memory} import "
                  + ", ".join(f"{f} as law_{f}" for f in MEMORY_FUNCTIONS))
     jumps = law if law_module.JUMPS else "chaospound.physics.contact.memoryless"
-    lines.append(f"from {jumps} import on_sides as law_on_sides, point_jump as law_point_jump, "
-                 "point_switch as law_point_switch, on_switch as law_on_switch")
+    shifts = bool(getattr(law_module, "SHIFTED_TANGENT", False))
+    switches = law if law_module.JUMPS or shifts else "chaospound.physics.contact.memoryless"
+    lines.append(f"from {jumps} import on_sides as law_on_sides, point_jump as law_point_jump")
+    lines.append(f"from {switches} import point_switch as law_point_switch, "
+                 "on_switch as law_on_switch")
+    shifted = law if shifts else "chaospound.physics.contact.memoryless"
+    lines.append(f"from {shifted} import point_shift as law_point_shift, "
+                 "shift_scale as law_shift_scale")
     if not model_carries_memory(c.model):
         lines.append("from chaospound.physics.models.no_memory import "
                      + ", ".join(MODEL_MEMORY_FUNCTIONS))
@@ -275,6 +281,8 @@ def _bindings(c: Composition) -> str:
         f"LAW_DISSIPATIVE = {bool(law_module.DISSIPATIVE)}",
         f"LAW_MEMORY = {bool(law_module.MEMORY)}",
         f"LAW_JUMPS = {bool(law_module.JUMPS)}",
+        # the shifted approach phase of a point contact's tangent (docs/contact_laws.md 7)
+        f"LAW_SHIFTED = {shifts and c.tangent != 'none' and c.model in POINT_MODELS}",
         f"LAW_DXI = {law_base(c.law) + getattr(law_module, 'TANGENT_SLOT', 0)}",
         f"GROUND = {ground_base(c)}",
         f"GROUND_Y = {c.ground_y}",
@@ -363,9 +371,11 @@ def check_tangent(c: Composition) -> None:
     continuous at a corner onset and release and only the Jacobian jumps, on a
     point contact (wall, pair) the engine maps the tangent vectors by the
     saltation matrix at every onset and release
-    (:func:`chaospound.engine.memory.saltation_tangent`). Refused: memory on a
-    model that does not carry it, and a point contact whose Jacobian is
-    singular at every onset (Jankowski's, ``POINT_JACOBIAN_SINGULAR``).
+    (:func:`chaospound.engine.memory.saltation_tangent`); a point contact whose
+    Jacobian is singular after every onset (Jankowski's): the engine integrates
+    the approach phase's vectors shifted (``SHIFTED_TANGENT``,
+    :func:`chaospound.engine.memory.shift_tangent`). Refused: memory on a model
+    that does not carry it.
 
     Raises
     ------
@@ -376,13 +386,6 @@ def check_tangent(c: Composition) -> None:
     if c.tangent == "none":
         return
     law = importlib.import_module(LAWS[c.law])
-    if getattr(law, "POINT_JACOBIAN_SINGULAR", False) and c.model in POINT_MODELS:
-        raise ValueError(f"contact law {c.law!r} on the {c.model} model: Lyapunov exponents "
-                         "and monodromy matrices are not available (its point contact's "
-                         "Jacobian is singular at every onset); use the two-trajectory "
-                         "estimate (chaospound.dynamics.lyapunov."
-                         "largest_exponent_two_trajectory), or a towers model, whose line "
-                         "contact integrates the singularity")
     if law.MEMORY and not model_carries_memory(c.model):
         raise ValueError(f"contact law {c.law!r} on the {c.model} model: Lyapunov exponents "
                          "and monodromy matrices are not available (its onset velocity v0 "

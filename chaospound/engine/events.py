@@ -17,14 +17,16 @@ the rate, and the penetration there decides whether two crossings happened.
 
 The event quantities are numbered (data, not kinds): 0, 1 the penetrations
 d_lo, d_hi; 2, 3 their rates; 4 the rate of the resultant contact force; 5 a
-point contact's switch function (Kelvin-Voigt's no-pull ``k d + c d'``, whose
-zero a tangent run lands on: the Jacobian jumps there).
+point contact's switch function (Kelvin-Voigt's no-pull ``k d + c d'``,
+Jankowski's rate ``d'``, whose zero a tangent run lands on: the Jacobian jumps
+there).
 """
 
 from chaospound.kernels.free import (
     DENSE_ROWS,
     LAW,
     LAW_JUMPS,
+    LAW_SHIFTED,
     N_BASE,
     N_ENDS,
     TANGENT,
@@ -41,7 +43,7 @@ TIME_TOL = 1e-13  #: absolute tolerance of located event times (normalised time)
 EXTREMUM_TOL = 1e-9
 MAX_ITER = 200  #: iteration cap of the root finders (bisection halves 2^-200)
 FORCE_RATE = 4  #: number of the contact force's rate among the event quantities
-SWITCH = 5  #: number of a point contact's switch function (tangent runs, jumping laws)
+SWITCH = 5  #: number of a point contact's switch function (tangent runs, jumping or shifted laws)
 
 # ==== template ====
 
@@ -58,7 +60,7 @@ def end_value(q, y, t, h, theta, p, which, work, ends):
     model_ends(t + theta * h, work, p, ends)
     if which == FORCE_RATE:
         return model_force_rate(t + theta * h, work, p, ends)
-    if TANGENT and LAW_JUMPS and N_ENDS == 1 and which == SWITCH:
+    if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and which == SWITCH:
         return law_point_switch(p, LAW, ends[0], ends[2])
     return ends[which]
 
@@ -84,7 +86,7 @@ def locate_root(q, y, t, h, p, which, lo, f_lo, hi, f_hi, slope_hi, work, ends):
     """
     newton = which < 2  # penetrations: their rates are the derivatives
     tol = TIME_TOL if newton else EXTREMUM_TOL
-    if TANGENT and LAW_JUMPS and N_ENDS == 1 and which == SWITCH:
+    if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and which == SWITCH:
         tol = TIME_TOL  # where the Jacobian jumps: as sharp as a crossing
     theta_tol = tol / h if h > 0.0 else 1e-15
     side = 0

@@ -68,6 +68,7 @@ from chaospound.kernels.free import (
     LAW_DXI,
     LAW_JUMPS,
     LAW_MEMORY,
+    LAW_SHIFTED,
     N_BASE,
     N_ENDS,
     NEW_EVALS,
@@ -95,6 +96,7 @@ from chaospound.kernels.free import (
     saltation_tangent,
     section_tangent,
     section_tangent_memory,
+    shift_tangent,
     step,
 )
 from chaospound.kernels.jit import kernel
@@ -195,6 +197,17 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     if LAW_MEMORY and n_vectors > 0:
         reset_tangent_memory(p, n_vectors)  # the tangent starts at the packed memory
 
+    clipped = False  # a point contact's no-pull force is clipped (tangent runs)
+    if LAW_SHIFTED:
+        # Jankowski's point contact: the approach phase's tangent vectors are shifted
+        # (clipped: separating or out of contact, no shift), decided before the first
+        # derivative, which depends on it (docs/contact_laws.md section 7)
+        model_ends(t0 + tau, y, p, ends_old)
+        clipped = not ends_old[0] > 0.0 or law_point_switch(p, LAW, ends_old[0],
+                                                            ends_old[2]) < 0.0
+        law_on_switch(p, LAW, clipped)
+        if not clipped and n_vectors > 0 and tau != 0.0:  # (at a section: shifted there)
+            shift_tangent(p, ends_old[0], False, y, n_base, n_vectors, work2)
     rhs(t0 + tau, y, p, f0)
     stats[ST_RHS_EVALS] += 1
     if not ADAPTIVE:
@@ -212,7 +225,6 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     active = inside_lo or inside_hi
     if LAW_JUMPS:  # the law's Jacobian follows the event flags (docs/contact_laws.md 7)
         law_on_sides(p, LAW, inside_lo, inside_hi)
-    clipped = False  # a point contact's no-pull force is clipped (tangent runs)
     if TANGENT and LAW_JUMPS and N_ENDS == 1:
         clipped = inside_lo and law_point_switch(p, LAW, ends_old[0], ends_old[2]) < 0.0
         law_on_switch(p, LAW, clipped)
@@ -232,6 +244,10 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     while True:
         if at_section:
             at_section = False
+            if LAW_SHIFTED and not clipped and n_vectors > 0 and attempts > 0:
+                # the vectors are read and reset as themselves, not in the shifted form
+                model_ends(t0, y, p, ends_tmp)
+                shift_tangent(p, ends_tmp[0], True, y, n_base, n_vectors, work2)
             if n_vectors > 0 and attempts > 0:
                 if LAW_MEMORY:  # the vectors' memory sensitivities follow them
                     section_tangent_memory(y, p, LAW_DXI, n_base, n_vectors, tangent_log,
@@ -250,6 +266,11 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             if k >= k_end:
                 record_done = True
             seg_end = period
+            if LAW_SHIFTED and not clipped and n_vectors > 0:  # back to the shifted form
+                model_ends(t0, y, p, ends_tmp)
+                shift_tangent(p, ends_tmp[0], False, y, n_base, n_vectors, work2)
+                rhs(t0, y, p, f0)
+                stats[ST_RHS_EVALS] += 1
         if record_done and (not active or k > k_end + FOLLOW_CYCLES):
             break  # an episode that never ends (towers resting on each other) is cut
         if attempts >= max_steps:
@@ -340,9 +361,9 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                     ev_theta[n_ev] = theta2
                     ev_end[n_ev] = end
                     n_ev += 1
-        if TANGENT and LAW_JUMPS and N_ENDS == 1 and inside_lo:
-            # in contact, the no-pull switch k d + c d' = 0 of a point contact: the
-            # force is continuous there but its Jacobian jumps, which an
+        if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and inside_lo:
+            # in contact, the no-pull switch k d + c d' = 0 of a point contact (Jankowski:
+            # d' = 0): the force is continuous there but its Jacobian jumps, which an
             # un-located step would integrate to first order only
             g_new = law_point_switch(p, LAW, ends_new[0], ends_new[2])
             if (g_new < 0.0) != clipped:
@@ -408,6 +429,21 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         for i in range(n_ev):
             theta = ev_theta[i]
             end = ev_end[i]
+            if LAW_SHIFTED and end == SWITCH_END:
+                if inside_lo:  # (no switch after a release earlier in the step)
+                    # Jankowski's d' = 0: the vectors change form (shifted while
+                    # approaching) and the Jacobian its phase
+                    clipped = not clipped
+                    law_on_switch(p, LAW, clipped)
+                    if theta < 1.0 and not salted:  # converted at the switch, carried
+                        carry_shift(dense, y, t_here, h_try, theta, t_here + theta * h_try,
+                                    p, True, clipped, y_new, n_base, n_vectors, work, work2)
+                    else:  # landed (or a second event in the step): at the step's end
+                        model_ends(t_here + h_try, y_new, p, ends_tmp)
+                        shift_tangent(p, ends_tmp[0], clipped, y_new, n_base, n_vectors,
+                                      work2)
+                    salted = True
+                continue
             if TANGENT and LAW_JUMPS and N_ENDS == 1 and end == SWITCH_END:
                 if inside_lo:  # (no switch after a release earlier in the step)
                     clipped = not clipped
@@ -442,6 +478,17 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                 inside_hi = not inside_hi
             if LAW_JUMPS:
                 law_on_sides(p, LAW, inside_lo, inside_hi)
+            if LAW_SHIFTED and clipped != (not inside_lo):
+                # an onset starts an approach (d' >= 0), a release ends the contact: the
+                # vectors keep their form (the shift is the identity at d = 0), the
+                # Jacobian changes phase
+                clipped = not inside_lo
+                law_on_switch(p, LAW, clipped)
+                if n_vectors > 0:
+                    if theta < 1.0 and not salted:
+                        carry_shift(dense, y, t_here, h_try, theta, t_ev, p, False, clipped,
+                                    y_new, n_base, n_vectors, work, work2)
+                    salted = True
             if TANGENT and LAW_JUMPS and N_ENDS == 1 and n_vectors > 0:
                 # the point force jumps here: the saltation matrix maps the tangent
                 # vectors (docs/contact_laws.md section 7)
@@ -500,7 +547,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             active = now_active
         if status != STATUS_OK:
             break
-        if TANGENT and LAW_JUMPS and N_ENDS == 1 and salted:
+        if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and salted:
             # the step's last derivative is the next step's first stage: the vectors'
             # part again, from the mapped vectors with the Jacobian of the new side
             rhs_vectors(t_here + h_try, y_new, p, f_new)
@@ -582,6 +629,33 @@ def carry_saltation(dense, y, t, h, theta, t_ev, p, rate, onset, jump, y_new, n_
     dense_eval(DENSE_ROWS, dense, y, h, theta, work)
     if jump:
         saltation_tangent(p, rate, onset, work, n_base, n_vectors, buf)
+    rhs_vectors(t_ev, work, p, buf)
+    delta = (1.0 - theta) * h
+    for i in range(n_base, n):
+        y_new[i] = work[i] + delta * buf[i]
+
+
+@kernel
+def carry_shift(dense, y, t, h, theta, t_ev, p, convert, clipped, y_new, n_base, n_vectors,
+                work, buf):
+    """The tangent vectors at the end of a step whose Jankowski point contact changed
+    phase inside it (``LAW_SHIFTED``).
+
+    As :func:`carry_saltation`: the step integrated the old phase's equations
+    throughout; the vectors at the event ``t_ev = t + theta h`` (the step's
+    interpolant) are converted to the new phase's form (``convert``: at the
+    switch d' = 0, shifted while approaching, :func:`shift_tangent`; an onset or
+    a release keeps the form, the shift being the identity at d = 0) and
+    carried to the step's end by ``I + delta J+`` (``delta = (1 - theta) h``,
+    J+ the new phase's, with the law's flag already written: ``clipped`` True
+    when the new phase is separating). ``work`` and ``buf`` are workspaces of
+    y's size; the vectors of ``y_new`` are overwritten.
+    """
+    n = y.shape[0]
+    dense_eval(DENSE_ROWS, dense, y, h, theta, work)
+    if convert:
+        model_ends(t_ev, work, p, buf)
+        shift_tangent(p, buf[0], clipped, work, n_base, n_vectors, buf)
     rhs_vectors(t_ev, work, p, buf)
     delta = (1.0 - theta) * h
     for i in range(n_base, n):

@@ -1,9 +1,10 @@
-"""Laws with memory or jumps in the tangent dynamics (docs/contact_laws.md section 7).
+"""Laws with memory, jumps or a shift in the tangent dynamics (docs/contact_laws.md section 7).
 
 A template (:mod:`.compose`), used only by a composition that carries tangent
 vectors and whose law has memory (``LAW_MEMORY``: hertzdamp, hunt-crossley,
-:func:`onset_tangent`) or whose point force jumps (``LAW_JUMPS`` on a point
-contact: kelvin-voigt, :func:`saltation_tangent`).
+:func:`onset_tangent`), whose point force jumps (``LAW_JUMPS`` on a point
+contact: kelvin-voigt, :func:`saltation_tangent`) or whose point Jacobian is
+singular after an onset (``LAW_SHIFTED``: jankowski, :func:`shift_tangent`).
 
 **Memory.** The law's damping coefficient ``xi = zeta / v0`` is set at every
 onset from the closing velocity ``v0 = V(t_e, x(t_e))`` at the end that
@@ -34,6 +35,18 @@ by the saltation matrix
 included). That is the contact part of the model's Jacobian-vector product
 with a contact stiffness s and no damping, so the models need nothing new:
 ``model_jvp(p, (s, 0, ...), v) - model_jvp(p, (0, ...), v)``.
+
+**Shift.** Jankowski's point force ``beta d^chi + c(d) d'`` (approaching;
+``c(d) = c_s d^(1/4)``) is continuous, but ``dF/dd`` has the term ``c'(d) d'
+~ d^(-3/4)``. While approaching, the engine integrates ``w = P v``, ``P = I -
+c(d) e_F grad(d)^T`` instead of the vectors v: ``grad(d) . e_F = 0`` and
+``grad(d') = J_free^T grad(d)`` give ``P J + P' = J_el = J_free + k_e e_F
+grad(d)^T`` (``k_e = chi beta d^(chi - 1)``: ``P'`` cancels the singular
+term), so ``w' = J_el P^-1 w``, bounded, with ``P^-1 = I + c(d) e_F
+grad(d)^T`` (the point models' :func:`model_jvp` with the shift ``lin[2] =
+c(d)``). ``P = I`` at an onset (c(0) = 0); :func:`shift_tangent` converts
+where the phase changes inside the contact (the switch d' = 0) and where the
+vectors are read or reset (sections).
 """
 
 from chaospound.kernels.free import (
@@ -41,12 +54,13 @@ from chaospound.kernels.free import (
     LAW_DXI,
     law_onset_sensitivity,
     law_point_jump,
+    law_shift_scale,
     model_jvp,
     model_onset_accel,
     model_onset_variation,
     rhs,
 )
-from chaospound.kernels.jit import kernel
+from chaospound.kernels.jit import inline, kernel
 
 # ==== template ====
 
@@ -109,6 +123,42 @@ def saltation_tangent(p, rate, onset, y, n_base, n_vectors, w):
     s = law_point_jump(p, LAW, rate, onset)
     if s == 0.0:
         return
+    _add_force_column(p, s, y, n_base, n_vectors, w)
+
+
+@kernel
+def shift_tangent(p, d, unshift, y, n_base, n_vectors, w):
+    """Convert each tangent vector between the plain and the approach phase's shifted form.
+
+    ``w = v - c(d) e_F (grad(d) . v)`` (``unshift`` False: into the approach
+    phase), ``v = w + c(d) e_F (grad(d) . w)`` (True: out of it), with ``c(d)``
+    the law's ``law_shift_scale`` (Jankowski's damping coefficient ``c_s d^q``,
+    0 for d <= 0) and the same difference of the model's Jacobian-vector
+    products as :func:`saltation_tangent`.
+
+    Parameters
+    ----------
+    p : ndarray
+        Packed parameters.
+    d : float
+        Penetration of the point contact where the vectors are converted (units of A_g).
+    unshift : bool
+        True: shifted to plain vectors; False: plain to shifted.
+    y : ndarray
+        State followed by ``n_vectors`` tangent vectors of ``n_base`` values;
+        the vectors are changed in place.
+    w : ndarray
+        Workspace of at least ``2 n_base`` values.
+    """
+    c = law_shift_scale(p, LAW, d)
+    if c == 0.0:
+        return
+    _add_force_column(p, c if unshift else -c, y, n_base, n_vectors, w)
+
+
+@inline
+def _add_force_column(p, s, y, n_base, n_vectors, w):
+    """``v += e_F s (grad(d) . v)`` for every tangent vector of ``y`` (s in K_Ax / omega_Ax)."""
     jump = (s, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     none = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     with_jump = w[:n_base]

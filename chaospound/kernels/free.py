@@ -19,6 +19,7 @@ LAW = 0  #: first slot of the contact law's block
 LAW_DISSIPATIVE = False  #: the law's force depends on the penetration rate
 LAW_MEMORY = False  #: the law keeps per-episode memory (written at every onset)
 LAW_JUMPS = False  #: the law's force can jump at an onset or a release
+LAW_SHIFTED = False  #: a point model's tangent run shifts the approach phase's vectors
 LAW_DXI = 0  #: slot of the first tangent vector's memory sensitivity d xi (laws with memory)
 GROUND = 0  #: first slot of the ground motion's block
 GROUND_PERIODIC = True  #: the motion is periodic with the section interval (the sine)
@@ -41,6 +42,7 @@ law_line_force = law_line_gradient = law_line_force_rate = law_line_potential = 
 law_on_onset = _unbound
 law_onset_sensitivity = law_point_memory_force = law_line_memory_force = _unbound
 law_on_sides = law_point_jump = law_point_switch = law_on_switch = _unbound
+law_point_shift = law_shift_scale = _unbound
 # ---- ground motion
 ground_at = ground_anchor = ground_shifted = ground_at_anchor = ground_next_kink = _unbound
 ground_acceleration = ground_at_y = _unbound
@@ -57,3 +59,4 @@ section_tangent_memory = _unbound
 # ---- defined by the engine templates, used by others
 rhs = rhs_grounded = end_value = locate_root = locate_extremum = _unbound
 onset_tangent = reset_tangent_memory = saltation_tangent = rhs_vectors = _unbound
+shift_tangent = _unbound

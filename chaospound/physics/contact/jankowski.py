@@ -12,10 +12,19 @@ block's ``c_scale``. The formula for xi is Jankowski's fit for chi = 3/2; anothe
 chi is accepted but its e is not calibrated.
 
 The force is continuous: ``c(d) r`` vanishes at the contact edge (d = 0) and
-at the switch (r = 0), so ``JUMPS = False``; its Jacobian jumps across the
-switch ``d' = 0`` (``SWITCHES = 1``: dF/dd' goes from c(d) to 0). A
-continuous vector field with a discontinuous Jacobian has the identity as
-saltation matrix, so the tangent dynamics need no correction there.
+at the switch (r = 0), so ``JUMPS = False`` and the saltation matrix is the
+identity at an onset, a release and the switch. Its Jacobian jumps across the
+switch ``d' = 0`` (``SWITCHES = 1``: dF/dd' goes from c(d) to 0), and on a
+point contact it is unbounded after an onset (``dF/dd = chi beta d^(chi - 1) +
+q c(d) d' / d ~ d^(-3/4)``), which no Runge-Kutta stage can sample. A tangent
+run on a point model (wall, pair) integrates the approach phase's tangent
+vectors in shifted coordinates instead (``SHIFTED_TANGENT``): ``w = v - c(d)
+e_F (grad(d) . v)``, whose equations ``w' = J_el (w + c(d) e_F (grad(d) .
+w))`` (``J_el`` the Jacobian with the elastic stiffness only) have bounded
+coefficients; the engine lands on the switch d' = 0 (:func:`point_switch`), where it
+converts back, and keeps the phase in the block's ``phase`` slot
+(:func:`on_switch`, :func:`point_stiffness`, :func:`point_shift`;
+docs/contact_laws.md section 7).
 
 Line resultants: the approach part of the line (``r(s) > 0``) is a half-line,
 split at ``s* = r_lo / (r_lo - r_hi)``; on it ``d`` and ``r`` are again linear
@@ -47,7 +56,11 @@ from chaospound.physics.contact.moments import moments
 from chaospound.physics.powers import power
 
 NAME = "jankowski"
-PARAMETERS = ("beta", "chi", "c_scale")  #: the law's block, in order
+#: the law's block, in order; ``phase`` holds the engine's flags of a point contact's
+#: tangent run (:func:`on_switch`), 0 from :func:`block` and in every other run
+PARAMETERS = ("beta", "chi", "c_scale", "phase")
+PHASE_KNOWN = 1  #: bit of the ``phase`` slot: the engine wrote its phase flag (the next bit)
+APPROACH = 2  #: bit: the engine integrates the approach phase's shifted tangent vectors
 MEMORY = ()  #: no per-episode memory
 CONSERVATIVE = False  #: dissipative; the potentials below are the elastic part's
 DISSIPATIVE = True  #: the force depends on the penetration rate
@@ -55,9 +68,11 @@ JUMPS = False  #: continuous force; its Jacobian jumps at d' = 0
 SWITCHES = 1  #: the surface d' = 0 while in contact (approach -> restitution)
 #: dF/dd grows like d^(-3/4) d' as a point contact starts (the damping coefficient
 #: goes like d^(1/4)): integrable, so the flow is differentiable, but the variational
-#: equations of a point contact are singular at every onset and an adaptive step
-#: cannot follow them; along a line the singularity is integrated over the overlap
-POINT_JACOBIAN_SINGULAR = True
+#: equations of a point contact are singular at every onset. A point model's tangent
+#: run integrates the approach phase's vectors shifted by ``-c(d) e_F grad(d)^T``,
+#: whose equations are bounded (:func:`point_shift`; along a line the singularity is
+#: integrated over the overlap and no shift is needed)
+SHIFTED_TANGENT = True
 
 
 def damping_ratio(e: float) -> float:
@@ -83,12 +98,12 @@ def block(e: float, *, beta: float, m_eff: float, chi: float = 1.5) -> dict[str,
     Returns
     -------
     dict
-        ``{"beta", "chi", "c_scale": 2 xi sqrt(beta m_eff)}``.
+        ``{"beta", "chi", "c_scale": 2 xi sqrt(beta m_eff), "phase": 0}``.
     """
     if not beta > 0.0 or not m_eff > 0.0 or not chi >= 1.0:
         raise ValueError(f"beta = {beta}, m_eff = {m_eff}, chi = {chi}: need > 0, > 0, >= 1")
     c_scale = 2.0 * damping_ratio(e) * math.sqrt(beta * m_eff)
-    return {"beta": float(beta), "chi": float(chi), "c_scale": float(c_scale)}
+    return {"beta": float(beta), "chi": float(chi), "c_scale": float(c_scale), "phase": 0.0}
 
 
 @inline
@@ -104,7 +119,7 @@ def point_force(p, base, d, rate):
 
 
 @inline
-def point_stiffness(p, base, d, rate):
+def _stiffness(p, base, d, rate):
     """``(dF/dd, dF/drate)`` of :func:`point_force` (one-sided at d' = 0: separating)."""
     if d <= 0.0:
         return 0.0, 0.0
@@ -117,11 +132,82 @@ def point_stiffness(p, base, d, rate):
     return k, 0.0
 
 
+@inline
+def point_stiffness(p, base, d, rate):
+    """``(dF/dd, dF/drate)`` of :func:`point_force`, units of K_Ax and K_Ax / omega_Ax.
+
+    In a tangent run of a point model (the engine's flag written,
+    :func:`on_switch`): the elastic stiffness ``chi beta d^(chi - 1)`` alone, in
+    both phases: while approaching, the damping enters the shifted tangent
+    vectors' equations through :func:`point_shift`, and ``dF/dd``'s singular
+    term ``q c(d) d' / d`` cancels (docs/contact_laws.md section 7). Otherwise
+    the derivatives themselves, one-sided at d' = 0 (separating).
+    """
+    if int(p[base + 3]) & PHASE_KNOWN:
+        if d <= 0.0:
+            return 0.0, 0.0
+        chi = p[base + 1]
+        return p[base] * chi * power(d, chi - 1.0), 0.0
+    return _stiffness(p, base, d, rate)
+
+
 @kernel
 def point_force_rate(p, base, d, rate, accel=0.0):
     """``dF/dt = dF/dd d' + dF/dd' d''`` in contact (``accel`` = d'')."""
-    k, c = point_stiffness(p, base, d, rate)
+    k, c = _stiffness(p, base, d, rate)
     return k * rate + c * accel
+
+
+@kernel
+def shift_scale(p, base, d):
+    """The damping coefficient ``c(d) = c_s d^q`` (0 for d <= 0), units of K_Ax / omega_Ax.
+
+    The shift of the approach phase's tangent vectors, ``w = v - c(d) e_F
+    (grad(d) . v)``, and of its inverse ``v = w + c(d) e_F (grad(d) . w)``
+    (:func:`chaospound.engine.memory.shift_tangent`): 0 at an onset, so the
+    shift starts as the identity.
+    """
+    if d <= 0.0:
+        return 0.0
+    return p[base + 2] * power(d, 0.5 * (p[base + 1] - 1.0))
+
+
+@inline
+def point_shift(p, base, d):
+    """The shift coefficient of the model's linearisation (units of K_Ax / omega_Ax).
+
+    ``c(d)`` in contact where the engine's flag says it integrates an approach
+    phase (:func:`on_switch`), else 0. The point models apply their Jacobian
+    (with :func:`point_stiffness`'s elastic stiffness) to ``w + s e_F (grad(d) .
+    w)``: ``J_w w = J_el P^-1 w``, the shifted vectors' equations.
+    """
+    if int(p[base + 3]) & APPROACH:
+        return shift_scale(p, base, d)
+    return 0.0
+
+
+@kernel
+def point_switch(p, base, d, rate):
+    """The switch function of a point contact: its rate d' (units of A_g omega_Ax).
+
+    Approaching where d' > 0; its Jacobian (and the tangent vectors'
+    representation) changes on d' = 0 inside the contact (the force does not:
+    no saltation), so a tangent run lands its steps there
+    (chaospound/engine/loop.py).
+    """
+    return rate
+
+
+@kernel
+def on_switch(p, base, clipped):
+    """Record the engine's phase of a point contact in a tangent run.
+
+    ``clipped`` False: in contact and approaching, the damping on, the tangent
+    vectors shifted (:func:`point_shift`); True: separating or out of contact.
+    Sets :data:`PHASE_KNOWN`, after which :func:`point_stiffness` drops the
+    damping's derivatives (only a run that writes the flag has it).
+    """
+    p[base + 3] = float(PHASE_KNOWN if clipped else PHASE_KNOWN | APPROACH)
 
 
 @inline

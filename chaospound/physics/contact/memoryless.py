@@ -3,11 +3,13 @@
 A composition binds ``law_onset_sensitivity``, ``law_point_memory_force`` and
 ``law_line_memory_force`` from the law's module when the law has ``MEMORY``
 (:mod:`.hertzdamp`, :mod:`.hunt_crossley`), and ``law_on_sides``,
-``law_point_jump``, ``law_point_switch`` and ``law_on_switch`` when it ``JUMPS``
-(:mod:`.kelvin_voigt`), else from here: the engine calls them only when
-``LAW_MEMORY`` (``LAW_JUMPS``) is on, so these are never reached; they exist so
-that every composition's text resolves the same names (docs/contact_laws.md
-section 7).
+``law_point_jump`` when it ``JUMPS`` (:mod:`.kelvin_voigt`), ``law_point_switch``
+and ``law_on_switch`` when it jumps or shifts its point tangent
+(``SHIFTED_TANGENT``: :mod:`.jankowski`), ``law_point_shift`` and
+``law_shift_scale`` when it shifts, else from here: the engine calls them only
+when ``LAW_MEMORY`` (``LAW_JUMPS``, ``LAW_SHIFTED``) is on, so these are never
+reached; they exist so that every composition's text resolves the same names
+(docs/contact_laws.md section 7).
 """
 
 from chaospound.kernels.jit import inline, kernel
@@ -55,3 +57,15 @@ def point_switch(p, base, d, rate):
 def on_switch(p, base, clipped):
     """Nothing to record: no switch surface."""
     return
+
+
+@kernel
+def shift_scale(p, base, d):
+    """0: no shift of the tangent vectors."""
+    return 0.0
+
+
+@inline
+def point_shift(p, base, d):
+    """0: the point Jacobian is bounded, its tangent vectors are not shifted."""
+    return 0.0

@@ -9,10 +9,12 @@ X_B, X_B')``, a point contact ``d = X_A - X_B - a``. A template, as
 from chaospound.kernels.free import (
     LAW,
     LAW_DISSIPATIVE,
+    LAW_SHIFTED,
     law_point_force,
     law_point_force_rate,
     law_point_memory_force,
     law_point_potential,
+    law_point_shift,
     law_point_stiffness,
 )
 from chaospound.kernels.jit import inline, kernel
@@ -99,25 +101,44 @@ def model_trace(p):
 
 @kernel
 def model_linearize(t, y, p):
-    """The contact stiffness dF/dd and damping dF/dd' (and 7 unused zeros)."""
+    """The contact stiffness dF/dd, damping dF/dd' and tangent shift (and 6 unused zeros).
+
+    The shift s (units of K_Ax / omega_Ax) is nonzero only in the approach phase of a
+    law whose point tangent is shifted (``LAW_SHIFTED``: Jankowski's, docs/contact_laws.md
+    section 7).
+    """
     d = y[0] - y[2] - p[P_GAP]
     stiffness, damping = law_point_stiffness(p, LAW, d, y[1] - y[3])
-    return stiffness, damping, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    shift = 0.0
+    if LAW_SHIFTED:
+        shift = law_point_shift(p, LAW, d)
+    return stiffness, damping, shift, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
 @kernel
 def model_jvp(p, lin, v, out):
-    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`."""
+    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`.
+
+    With a shift ``s = lin[2]`` (``LAW_SHIFTED`` only): ``J (v + s e_F (grad(d) . v))``,
+    ``e_F = (0, -mu_A, 0, mu_B)``, ``grad(d) = (1, 0, -1, 0)``: the shifted tangent
+    vectors' equations.
+    """
     stiffness = lin[0]
     a = TOWER_A
     b = TOWER_B
+    rate_a = v[1]
+    rate_b = v[3]
+    if LAW_SHIFTED:
+        gap = lin[2] * (v[0] - v[2])
+        rate_a -= p[a + T_MU] * gap
+        rate_b += p[b + T_MU] * gap
     squeeze = stiffness * (v[0] - v[2])
     if LAW_DISSIPATIVE:
-        squeeze += lin[1] * (v[1] - v[3])
-    out[0] = v[1]
-    out[1] = -p[a + T_OM2] * v[0] - p[a + T_CX] * v[1] - p[a + T_MU] * squeeze
-    out[2] = v[3]
-    out[3] = -p[b + T_OM2] * v[2] - p[b + T_CX] * v[3] + p[b + T_MU] * squeeze
+        squeeze += lin[1] * (rate_a - rate_b)
+    out[0] = rate_a
+    out[1] = -p[a + T_OM2] * v[0] - p[a + T_CX] * rate_a - p[a + T_MU] * squeeze
+    out[2] = rate_b
+    out[3] = -p[b + T_OM2] * v[2] - p[b + T_CX] * rate_b + p[b + T_MU] * squeeze
 
 
 @kernel

@@ -8,12 +8,14 @@ from chaospound.kernels.free import (
     GROUND,
     LAW,
     LAW_DISSIPATIVE,
+    LAW_SHIFTED,
     ground_acceleration,
     ground_at,
     law_point_force,
     law_point_force_rate,
     law_point_memory_force,
     law_point_potential,
+    law_point_shift,
     law_point_stiffness,
 )
 from chaospound.kernels.jit import inline, kernel
@@ -97,21 +99,36 @@ def model_trace(p):
 
 @kernel
 def model_linearize(t, y, p):
-    """The contact stiffness dF/dd and damping dF/dd' (and 7 unused zeros)."""
+    """The contact stiffness dF/dd, damping dF/dd' and tangent shift (and 6 unused zeros).
+
+    The shift s (units of K_Ax / omega_Ax) is nonzero only in the approach phase of a
+    law whose point tangent is shifted (``LAW_SHIFTED``: Jankowski's, docs/contact_laws.md
+    section 7).
+    """
     ug, vg = ground_at(t, p, GROUND)
     d = y[0] - ug - p[P_GAP]
     stiffness, damping = law_point_stiffness(p, LAW, d, y[1] - vg)
-    return stiffness, damping, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    shift = 0.0
+    if LAW_SHIFTED:
+        shift = law_point_shift(p, LAW, d)
+    return stiffness, damping, shift, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
 @kernel
 def model_jvp(p, lin, v, out):
-    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`."""
+    """``out = J v`` with the coefficients ``lin`` of :func:`model_linearize`.
+
+    With a shift ``s = lin[2]`` (``LAW_SHIFTED`` only): ``J (v + s e_F (grad(d) . v))``,
+    ``e_F = (0, -mu_A)``, ``grad(d) = (1, 0)``: the shifted tangent vectors' equations.
+    """
     a = TOWER_A
-    out[0] = v[1]
-    out[1] = -(p[a + T_OM2] + p[a + T_MU] * lin[0]) * v[0] - p[a + T_CX] * v[1]
+    rate = v[1]
+    if LAW_SHIFTED:
+        rate -= p[a + T_MU] * lin[2] * v[0]
+    out[0] = rate
+    out[1] = -(p[a + T_OM2] + p[a + T_MU] * lin[0]) * v[0] - p[a + T_CX] * rate
     if LAW_DISSIPATIVE:
-        out[1] -= p[a + T_MU] * lin[1] * v[1]
+        out[1] -= p[a + T_MU] * lin[1] * rate
 
 
 @kernel
