@@ -595,7 +595,8 @@ def report_text(s: dict, out: Path) -> str:
     ]
     refusals = s.get("refusals") or {}
     if refusals:
-        lines += ["**Refused tangent dynamics.** " + "; ".join(
+        lines += ["**Tangent dynamics refused when this ran** (Jankowski's on the pair model "
+                  "is exact since c2f2ec2; a rerun uses QR). " + "; ".join(
             f"`{k}`: \"{v[:200]}...\" (the stored first line)" for k, v in refusals.items())
             + ". These sweeps were rerun without exponents; each impacting point that the "
             "window leaves aperiodic got a two-trajectory exponent instead "
@@ -744,6 +745,11 @@ def findings_values(s: dict) -> dict:
     out["tor_higher"] = pf["paired"]["torsional_higher"]
     out["runs"] = pf["runs"]
     out["ratio"] = f"{pf['paired']['median_ratio']:.2f}"
+    refused = [k for k in (s.get("refusals") or {}) if "jankowski" in k]
+    out["exponent_note"] = (
+        "jankowski's by two-trajectory exponents: QR was refused on the pair model when "
+        "this ran; it is exact since c2f2ec2, docs/contact_laws.md section 7"
+        if refused else "every law's exponents by QR")
     c = s["twotraj_check"]
     out.update(tt_agree=c.get("agree", 0), tt_points=c.get("points", 0),
                tt_qr=c.get("qr_chaotic", 0), tt_tt=c.get("two_traj_chaotic", 0))
@@ -781,10 +787,9 @@ under hertz; jankowski e = 0.65: 0.514-0.548, 21 points), and short runs near
 
 **Translational pounding loses more.** Chaotic shares: hertz {r_hertz}; hertzdamp
 {r_hertzdamp_e065} / {r_hertzdamp_e05}; jankowski {r_jankowski_e065} / {r_jankowski_e05}
-(jankowski's by two-trajectory exponents: QR is refused on the pair model; on
-translational hertzdamp e = 0.65, where both exist, the two labels agree at {tt_agree}
-of {tt_points} aperiodic points, QR calling {tt_qr} chaotic and two trajectories {tt_tt},
-so on that scan the substitute calls slightly more points chaotic than QR, not fewer).
+({exponent_note}; on translational hertzdamp e = 0.65 the two-trajectory and QR labels
+agree at {tt_agree} of {tt_points} aperiodic points, QR calling {tt_qr} chaotic and two
+trajectories {tt_tt}).
 Its chaotic band at 0.734-0.773 (24 points)
 disappears under every damped law; what remains lies at 1.23-1.28 only. Under every law
 the torsional share is 3 to 4 times (jankowski e = 0.65: about 9 times) the
