@@ -28,16 +28,16 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import replace
 
-import numpy as np
 import pytest
+from pointorbits import (
+    assert_monodromy_is_the_finite_difference,
+    assert_qr_exponent_is_log_of_the_largest_multiplier,
+    fd_orbits,
+)
 
 from chaospound import load_preset
 from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
-from chaospound.dynamics.system import System
-from chaospound.orbits import StroboscopicMap, find_orbit, finite_difference_monodromy
-from chaospound.orbits.maps import variational_monodromy
 
 #: (preset, period ratio, no_pull): stable impacting period-1 orbits
 ORBITS = [("wall", 0.7, False), ("wall", 0.7, True),
@@ -52,18 +52,8 @@ def _scene(preset: str, ratio: float, no_pull: bool, e: float = 0.65):
 
 @pytest.fixture(scope="module")
 def orbits():
-    """``case -> (map, orbit)``: Newton on the finite-difference monodromy (every
-    iteration's, at the map's tolerance), so nothing here rests on the variational
-    one; ``orbit.monodromy`` is the finite difference at the solution."""
-    found = {}
-    for case in ORBITS:
-        smap = replace(StroboscopicMap.of(_scene(*case),
-                                          monodromy_provider=finite_difference_monodromy),
-                       jacobian_rtol=None)
-        orbit = find_orbit(smap, transient=60)
-        assert orbit.impacts_per_period >= 1 and orbit.stable
-        found[case] = (smap, orbit)
-    return found
+    """``case -> (map, orbit)`` (:func:`pointorbits.fd_orbits`)."""
+    return fd_orbits({case: _scene(*case) for case in ORBITS})
 
 
 @pytest.mark.parametrize("case", ORBITS, ids=IDS)
@@ -71,23 +61,14 @@ def test_monodromy_across_the_force_jumps_is_the_finite_difference(orbits, case)
     """The propagator monodromy of one period (the saltation at the onset and the
     release, the no-pull switch landed) equals the 5-point finite difference to
     1e-6 of its largest entry at rtol 1e-12 (measured 2e-8 to 1.2e-7)."""
-    smap, orbit = orbits[case]
-    reference = orbit.monodromy
-    _, matrix = variational_monodromy(smap, orbit.state, 1)
-    assert np.max(np.abs(matrix - reference)) < 1e-6 * np.max(np.abs(reference))
+    assert_monodromy_is_the_finite_difference(*orbits[case])
 
 
 @pytest.mark.parametrize("case", ORBITS, ids=IDS)
 def test_qr_exponent_is_log_of_the_largest_multiplier(orbits, case):
     """From the orbit's state, the QR largest exponent equals ``log |mu_1| / T`` of
     the finite-difference monodromy within three of its error bars."""
-    smap, orbit = orbits[case]
-    expected = math.log(abs(orbit.multipliers[0])) / smap.system.period
-    system = System.from_scene(_scene(*case).with_params(method="dop853", rtol=1e-11,
-                                                         atol=1e-13))
-    spectrum = lyapunov_spectrum(system, k=1, transient=0, tangent_transient=20, cycles=60,
-                                 n_blocks=6, initial_state=orbit.state)
-    assert abs(spectrum.exponents[0] - expected) < 3 * spectrum.errors[0]
+    assert_qr_exponent_is_log_of_the_largest_multiplier(*orbits[case], _scene(*case))
 
 
 @pytest.mark.parametrize("ratio,e,no_pull", [(1.25, 0.65, False), (1.24, 0.8, True)],
