@@ -1,12 +1,13 @@
 """Stable periodic orbits found without the variational equations, and the two checks
 of a point contact's tangent dynamics on them (test_saltation, test_jankowski_tangent)."""
 
+import json
 import math
 from dataclasses import replace
 
 import numpy as np
 
-from chaospound.dynamics.lyapunov import lyapunov_spectrum
+from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
 from chaospound.dynamics.system import System
 from chaospound.orbits import StroboscopicMap, find_orbit, finite_difference_monodromy
 from chaospound.orbits.maps import variational_monodromy
@@ -45,3 +46,31 @@ def assert_qr_exponent_is_log_of_the_largest_multiplier(smap, orbit, scene) -> N
     spectrum = lyapunov_spectrum(system, k=1, transient=0, tangent_transient=20, cycles=60,
                                  n_blocks=6, initial_state=orbit.state)
     assert abs(spectrum.exponents[0] - expected) < 3 * spectrum.errors[0]
+
+
+def assert_qr_agrees_with_two_trajectories(scene, cycles: int) -> None:
+    """On a chaotic ``scene`` (dop853, rtol 1e-10): the QR largest exponent and the
+    two-trajectory estimate over ``cycles`` (after 100) are clearly positive and agree
+    within three combined standard errors."""
+    scene = scene.with_params(method="dop853", rtol=1e-10, atol=1e-12)
+    qr = lyapunov_spectrum(scene, k=1, cycles=cycles, transient=100)
+    two = largest_exponent_two_trajectory(scene, cycles=cycles, transient=100)
+    assert two.exponent > 3 * two.error and qr.exponents[0] > 3 * qr.errors[0]
+    assert abs(qr.exponents[0] - two.exponent) < 3 * math.hypot(qr.errors[0], two.error)
+
+
+def assert_cli_lyapunov_runs_on_the_wall(capsys, law: str) -> None:
+    """``chaospound lyapunov`` on the wall with ``law`` (which it used to refuse) prints
+    a QR spectrum, and its json says QR is available, with two finite exponents."""
+    from chaospound.cli import main
+
+    argv = ["lyapunov", "--preset", "wall", "--set", f"contact_law={law}",
+            "--set", "method=dop853",  # the engines the orbit tests compiled
+            "--transient", "5", "--record", "2", "--cycles", "10"]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert "not available" not in out + err and "lambda (per unit t)" in out
+    assert main([*argv, "--json", "--no-floquet"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["qr"]["available"] is True and len(document["exponents"]) == 2
+    assert all(math.isfinite(x) for x in document["exponents"])

@@ -26,18 +26,16 @@ no-pull case that fails without the saltation.
 
 from __future__ import annotations
 
-import json
-import math
-
 import pytest
 from pointorbits import (
+    assert_cli_lyapunov_runs_on_the_wall,
     assert_monodromy_is_the_finite_difference,
+    assert_qr_agrees_with_two_trajectories,
     assert_qr_exponent_is_log_of_the_largest_multiplier,
     fd_orbits,
 )
 
 from chaospound import load_preset
-from chaospound.dynamics.lyapunov import largest_exponent_two_trajectory, lyapunov_spectrum
 
 #: (preset, period ratio, no_pull): stable impacting period-1 orbits
 ORBITS = [("wall", 0.7, False), ("wall", 0.7, True),
@@ -77,25 +75,9 @@ def test_qr_and_two_trajectory_agree_on_a_chaotic_pair(ratio, e, no_pull):
     """fig4-translational near T/T_Ax = 1.25 is chaotic with Kelvin-Voigt: the QR
     largest exponent (1000 cycles) and the two-trajectory estimate agree within
     three combined standard errors, and are clearly positive."""
-    scene = _scene("fig4-translational", ratio, no_pull, e).with_params(
-        method="dop853", rtol=1e-10, atol=1e-12)
-    qr = lyapunov_spectrum(scene, k=1, cycles=1000, transient=100)
-    two = largest_exponent_two_trajectory(scene, cycles=1000, transient=100)
-    assert two.exponent > 3 * two.error
-    assert abs(qr.exponents[0] - two.exponent) < 3 * math.hypot(qr.errors[0], two.error)
+    assert_qr_agrees_with_two_trajectories(_scene("fig4-translational", ratio, no_pull, e), 1000)
 
 
 def test_cli_lyapunov_on_the_wall_with_kelvin_voigt(capsys):
     """The QR spectrum of the wall with Kelvin-Voigt, which the CLI used to refuse."""
-    from chaospound.cli import main
-
-    argv = ["lyapunov", "--preset", "wall", "--set", "contact_law=kelvin-voigt",
-            "--set", "method=dop853",  # the engines the tests above compiled
-            "--transient", "5", "--record", "2", "--cycles", "10"]
-    assert main(argv) == 0
-    out, err = capsys.readouterr()
-    assert "not available" not in out + err and "lambda (per unit t)" in out
-    assert main([*argv, "--json", "--no-floquet"]) == 0
-    document = json.loads(capsys.readouterr().out)
-    assert len(document["exponents"]) == 2
-    assert all(math.isfinite(x) for x in document["exponents"])
+    assert_cli_lyapunov_runs_on_the_wall(capsys, "kelvin-voigt")
