@@ -792,7 +792,7 @@ agree at {tt_agree} of {tt_points} aperiodic points, QR calling {tt_qr} chaotic 
 trajectories {tt_tt}).
 Its chaotic band at 0.734-0.773 (24 points)
 disappears under every damped law; what remains lies at 1.23-1.28 only. Under every law
-the torsional share is 3 to 4 times (jankowski e = 0.65: about 9 times) the
+the torsional share is 3.2 to 4.4 times (jankowski e = 0.65: 9.6 times) the
 translational one. The 99th percentile of the impact velocity drops with damping from
 {vt_hertz} to {vt_hertzdamp_e065} / {vt_hertzdamp_e05} / {vt_jankowski_e065} /
 {vt_jankowski_e05} (torsional) and from {vr_hertz} to {vr_hertzdamp_e065} /
