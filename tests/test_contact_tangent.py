@@ -129,7 +129,10 @@ def test_qr_exponent_is_log_of_the_floquet_multiplier_on_a_periodic_orbit():
     assert abs(spectrum.exponents[0] - expected) < 1e-3 * abs(expected)
 
 
-@pytest.mark.parametrize("law", ["hertzdamp", "kelvin-voigt"])
+#: Kelvin-Voigt's line case compiles two engines of its own for a check that the pair's
+#: (tests/test_saltation.py) and the line monodromy above already make: a long study
+@pytest.mark.parametrize("law", ["hertzdamp",
+                                 pytest.param("kelvin-voigt", marks=pytest.mark.slow)])
 def test_qr_and_two_trajectory_agree_on_a_chaotic_scene(law):
     """fig4 at T/T_Ax = 0.9 stays chaotic with e = 0.65: the two estimates of the
     largest exponent agree within their error bars (and are clearly positive)."""
@@ -251,6 +254,7 @@ def test_cli_lyapunov_with_memory_on_a_line_contact(capsys):
     from chaospound.cli import main
 
     code = main(["lyapunov", "--preset", "tower-wall", "--set", "contact_law=hertzdamp",
+                 "--set", "method=dop853",  # the engines the monodromy tests compiled
                  *SHORT, "--k", "2", "--two-trajectory", "--json"])
     out, err = capsys.readouterr()
     assert code == 0, err
@@ -267,7 +271,7 @@ def test_contact_damping_lowers_the_exponent_sum_below_the_structural_trace(caps
 
     elastic = System.from_scene(load_preset("tower-wall"))
     damped = System.from_scene(load_preset("tower-wall").with_params(
-        contact_law="hertzdamp", restitution=0.5))
+        contact_law="hertzdamp", restitution=0.5, method="dop853"))
     structural = float(elastic.engine("qr").module.model_trace(elastic.params))
     assert float(damped.engine("qr").module.model_trace(damped.params)) == structural
     settings = dict(transient=20, tangent_transient=5, cycles=60, n_blocks=3)
@@ -277,7 +281,7 @@ def test_contact_damping_lowers_the_exponent_sum_below_the_structural_trace(caps
     assert math.isnan(spectrum.trace)
     assert float(np.sum(spectrum.exponents)) < structural - 0.1
     code = main(["lyapunov", "--preset", "tower-wall", "--set", "contact_law=hertzdamp",
-                 *SHORT, "--k", "6"])
+                 "--set", "method=dop853", *SHORT, "--k", "6"])
     out, err = capsys.readouterr()
     assert code == 0, err
     assert "not constant along the orbit" in out and "difference" not in out
