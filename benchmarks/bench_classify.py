@@ -24,8 +24,16 @@ agreement over all points and over the points the careful classifier names (an
 "unresolved" reference has no label to agree with; it counts as a disagreement in
 the first share).
 
+``birkhoff``: the digits of the weighted Birkhoff average
+(:func:`chaospound.dynamics.classify.birkhoff_digits`) on the attractors of the
+fig4 scan's default sweep (1000 points, one worker): for each chaotic,
+quasi-periodic and unresolved point, 1000 sections from its stored final state at
+the classification's tolerances, the observable of rule 6 (the scaled sections on
+their first principal direction). Writes results/classify_birkhoff.json.
+
 Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds 3
      PYTHONPATH=. python benchmarks/bench_classify.py agreement --per-set 67
+     PYTHONPATH=. python benchmarks/bench_classify.py birkhoff
 """
 
 from __future__ import annotations
@@ -179,6 +187,48 @@ def _markdown(s: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def birkhoff() -> dict:
+    from chaospound import open_sweep
+    from chaospound.dynamics.classify import (
+        _classification_system,
+        _principal_component,
+        birkhoff_digits,
+        length_weights,
+    )
+    from chaospound.dynamics.system import System
+    from chaospound.simulate import simulate
+
+    scene = load_preset("fig4")
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "fig4.h5"
+        run_sweep(scene, SweepSpec(axes=(parse_axis("period_ratio=0.3:2.0#1000"),)), path,
+                  progress=False)
+        with open_sweep(path) as store:
+            data = store.to_xarray()
+            regimes, ratios = data.regime.values, data.period_ratio.values
+            finals = data.final_state.values
+    out: dict = {"command": "python benchmarks/bench_classify.py birkhoff", "sections": 1000,
+                 "digits": {}, "summary": {}}
+    for label in ("chaotic", "quasi-periodic", "unresolved"):
+        digits = []
+        for i in np.flatnonzero(regimes == label):
+            point = scene.with_params(period_ratio=float(ratios[i]))
+            system = System.from_scene(point)
+            target, _, _ = _classification_system(system)
+            record = simulate(target, transient=0, record=1000, initial_state=finals[i],
+                              start_at_section=True)
+            states = record.strobe.state * length_weights(point, system.state_names)
+            digits.append(birkhoff_digits(_principal_component(states)))
+        d = np.array(digits)
+        out["digits"][label] = d.tolist()
+        out["summary"][label] = {} if d.size == 0 else {
+            "points": int(d.size), "min": float(d.min()), "median": float(np.median(d)),
+            "q95": float(np.quantile(d, 0.95)), "max": float(d.max()),
+            "at_least_5": int(np.sum(d >= 5.0))}
+        print(label, out["summary"][label], flush=True)
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="part", required=True)
@@ -191,11 +241,16 @@ def main() -> None:
     ag.add_argument("--seed", type=int, default=17)
     ag.add_argument("--careful-transient", type=int, default=6000)
     ag.add_argument("--careful-exponent", type=int, default=400)
+    sub.add_parser("birkhoff")
     args = parser.parse_args()
     RESULTS.mkdir(exist_ok=True)
     if args.part == "speed":
         out = speed(args.points, args.rounds, args.workers2)
         (RESULTS / "bench_classify.json").write_text(json.dumps(out, indent=1) + "\n")
+    elif args.part == "birkhoff":
+        out = birkhoff()
+        (RESULTS / "classify_birkhoff.json").write_text(json.dumps(out, indent=1) + "\n")
+        out = out["summary"]
     else:
         out = agreement(args.per_set, args.seed, args.careful_transient, args.careful_exponent)
         (RESULTS / "classify_agreement.json").write_text(json.dumps(out, indent=1) + "\n")

@@ -22,6 +22,8 @@ from chaospound.dynamics.classify import (
     DEFAULT_TOL,
     REGIMES,
     Regime,
+    _aperiodic_regime,
+    birkhoff_digits,
     classify,
     classify_sequence,
     mean_square_displacement,
@@ -224,6 +226,46 @@ def test_mean_square_displacement_by_fft_is_the_direct_sum(signal):
     assert fast.shape == (30, 100)
     scale = np.max(np.abs(direct), axis=1, keepdims=True)
     assert np.max(np.abs(fast - direct) / scale) < 1e-12
+
+
+# ================================================== weighted Birkhoff average
+def test_birkhoff_average_converges_super_fast_on_a_torus_only():
+    """On a circle rotation (a smooth observable of an irrational rotation, whose
+    exact average is known) the two halves' weighted averages agree to near
+    machine precision, and each equals the exact mean; on the logistic map's chaos
+    and on noise they agree only to about the N^(-1/2) of a plain average."""
+    n = np.arange(1000)
+    angle = 2 * np.pi * GOLDEN * n
+    torus = 0.4 + np.cos(angle) + 0.3 * np.sin(2 * angle + 1.0) + np.cos(angle) ** 3
+    assert birkhoff_digits(torus) > 11
+    half = np.arange(1, 501) / 501
+    w = np.exp(-1.0 / (half * (1.0 - half)))
+    assert abs(w @ torus[:500] / w.sum() - 0.4) < 1e-11  # cos^3 averages to 0 too
+    plain = -math.log10(abs(torus[:500].mean() - torus[500:].mean()) / np.ptp(torus))
+    assert plain < 6  # the plain average converges as 1/N on a torus, not faster
+    assert birkhoff_digits(logistic(1000)) < 3.5
+    noise = np.random.default_rng(2).normal(size=1000)
+    assert birkhoff_digits(noise) < 3.5
+    assert birkhoff_digits(np.full(50, 2.0)) == math.inf
+    with pytest.raises(ValueError, match="at least 20"):
+        birkhoff_digits(torus[:10])
+
+
+@pytest.mark.parametrize("k, digits, expected", [
+    (0.1, None, "quasi-periodic"),  # the 0-1 test alone
+    (0.5, 7.0, "quasi-periodic"),  # the Birkhoff average alone
+    (0.5, 3.0, "unresolved"),  # neither
+    (0.9, 2.0, "unresolved"),  # a chaotic K with lambda consistent with zero
+])
+def test_quasi_periodicity_needs_a_zero_exponent_and_one_regular_test(k, digits, expected):
+    """Rule 6: |lambda| <= 3 sigma and the record regular by the 0-1 test (K < 0.2) or by
+    the weighted Birkhoff average (>= 5 digits); a positive exponent stays chaotic."""
+    evidence = {} if digits is None else {"birkhoff_digits": digits}
+    regime, confidence = _aperiodic_regime(0.001, 0.002, k, evidence)
+    assert regime == expected
+    assert (confidence > 0) == (expected != "unresolved")
+    chaotic, _ = _aperiodic_regime(0.02, 0.002, 0.5, {"birkhoff_digits": 7.0})
+    assert chaotic == "chaotic"
 
 
 # ============================================================ scenes: physics

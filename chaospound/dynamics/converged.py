@@ -450,10 +450,13 @@ class _Classifier:
             regime = self._read_record(record, lam, err)
         if regime.regime == "unresolved":
             k = regime.zero_one
+            digits = regime.evidence.get("birkhoff_digits")
             self.evidence["why"] = (
                 f"exponent {lam:+.3g} +- {err:.2g} within {Z_EARLY:g} sigma after "
                 f"{BLOCK * len(blocks)} cycles and 0-1 test K = "
-                + ("n/a" if k is None else f"{k:.2f}") + " do not agree on a regime")
+                + ("n/a" if k is None else f"{k:.2f}")
+                + ("" if digits is None else f", Birkhoff average to {digits:.1f} digits")
+                + " do not agree on a regime")
         return self._result(regime, record, confidence=regime.confidence,
                             window=ZERO_ONE_CYCLES)
 
