@@ -402,6 +402,11 @@ def _footer(c: Composition) -> str:
         f"step = {method.stepper}",
         f"dense_prepare = {method.dense}",
         f"rhs_grounded = {'rhs_plain' if c.tangent == 'none' else 'rhs_tangent'}",
+        # a tangent run of a point contact whose force jumps maps its vectors by saltation;
+        # it lands on the law's switch there and where a shifted approach phase ends
+        # (N_ENDS is the model's, defined in its template body)
+        "POINT_JUMPS = TANGENT and N_ENDS == 1 and LAW_JUMPS",
+        "POINT_SWITCH = POINT_JUMPS or LAW_SHIFTED",
     ]) + "\n"
 
 

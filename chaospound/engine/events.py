@@ -25,11 +25,8 @@ there).
 from chaospound.kernels.free import (
     DENSE_ROWS,
     LAW,
-    LAW_JUMPS,
-    LAW_SHIFTED,
     N_BASE,
-    N_ENDS,
-    TANGENT,
+    POINT_SWITCH,
     law_point_switch,
     model_ends,
     model_force_rate,
@@ -60,7 +57,7 @@ def end_value(q, y, t, h, theta, p, which, work, ends):
     model_ends(t + theta * h, work, p, ends)
     if which == FORCE_RATE:
         return model_force_rate(t + theta * h, work, p, ends)
-    if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and which == SWITCH:
+    if POINT_SWITCH and which == SWITCH:
         return law_point_switch(p, LAW, ends[0], ends[2])
     return ends[which]
 
@@ -86,7 +83,7 @@ def locate_root(q, y, t, h, p, which, lo, f_lo, hi, f_hi, slope_hi, work, ends):
     """
     newton = which < 2  # penetrations: their rates are the derivatives
     tol = TIME_TOL if newton else EXTREMUM_TOL
-    if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and which == SWITCH:
+    if POINT_SWITCH and which == SWITCH:
         tol = TIME_TOL  # where the Jacobian jumps: as sharp as a crossing
     theta_tol = tol / h if h > 0.0 else 1e-15
     side = 0

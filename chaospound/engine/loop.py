@@ -72,6 +72,8 @@ from chaospound.kernels.free import (
     N_BASE,
     N_ENDS,
     NEW_EVALS,
+    POINT_JUMPS,
+    POINT_SWITCH,
     TANGENT,
     controller,
     dense_prepare,
@@ -225,7 +227,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     active = inside_lo or inside_hi
     if LAW_JUMPS:  # the law's Jacobian follows the event flags (docs/contact_laws.md 7)
         law_on_sides(p, LAW, inside_lo, inside_hi)
-    if TANGENT and LAW_JUMPS and N_ENDS == 1:
+    if POINT_JUMPS:
         clipped = inside_lo and law_point_switch(p, LAW, ends_old[0], ends_old[2]) < 0.0
         law_on_switch(p, LAW, clipped)
     episode = -1  # row of the impact whose episode is running, -1 if none recorded
@@ -361,7 +363,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                     ev_theta[n_ev] = theta2
                     ev_end[n_ev] = end
                     n_ev += 1
-        if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and inside_lo:
+        if POINT_SWITCH and inside_lo:
             # in contact, the no-pull switch k d + c d' = 0 of a point contact (Jankowski:
             # d' = 0): the force is continuous there but its Jacobian jumps, which an
             # un-located step would integrate to first order only
@@ -444,7 +446,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                                       work2)
                     salted = True
                 continue
-            if TANGENT and LAW_JUMPS and N_ENDS == 1 and end == SWITCH_END:
+            if POINT_JUMPS and end == SWITCH_END:
                 if inside_lo:  # (no switch after a release earlier in the step)
                     clipped = not clipped
                     law_on_switch(p, LAW, clipped)
@@ -489,7 +491,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                         carry_shift(dense, y, t_here, h_try, theta, t_ev, p, False, clipped,
                                     y_new, n_base, n_vectors, work, work2)
                     salted = True
-            if TANGENT and LAW_JUMPS and N_ENDS == 1 and n_vectors > 0:
+            if POINT_JUMPS and n_vectors > 0:
                 # the point force jumps here: the saltation matrix maps the tangent
                 # vectors (docs/contact_laws.md section 7)
                 clipped = False  # from an onset (k d + c d' = c d' > 0), or out of contact
@@ -547,7 +549,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             active = now_active
         if status != STATUS_OK:
             break
-        if (TANGENT and LAW_JUMPS and N_ENDS == 1 or LAW_SHIFTED) and salted:
+        if POINT_SWITCH and salted:
             # the step's last derivative is the next step's first stage: the vectors'
             # part again, from the mapped vectors with the Jacobian of the new side
             rhs_vectors(t_here + h_try, y_new, p, f_new)
