@@ -757,6 +757,10 @@ class _LocalBackend:
         self._scene = scene
         self._spec = spec
         self._pool = None
+        # one worker computes in this process: its small matrices (Newton, Floquet, the
+        # 0-1 test's principal direction) run faster without BLAS threads spinning
+        # beside it (fig4's scan: docs/classification.md); restored by close/abort
+        self._blas = set_blas_threads(1) if workers == 1 else []
         if workers > 1:
             ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
             self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
@@ -789,6 +793,8 @@ class _LocalBackend:
         return fut.result()
 
     def abort(self) -> None:
+        restore_blas_threads(self._blas)
+        self._blas = []
         if self._pool is not None:
             for proc in list(getattr(self._pool, "_processes", {}).values()):
                 proc.terminate()
@@ -796,6 +802,8 @@ class _LocalBackend:
             self._pool = None
 
     def close(self) -> None:
+        restore_blas_threads(self._blas)
+        self._blas = []
         if self._pool is not None:
             self._pool.shutdown(wait=True)
             self._pool = None
@@ -849,15 +857,27 @@ def single_thread_blas() -> list[str]:
     """
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[name] = "1"
+    return [path for path, _, _ in set_blas_threads(1)]
+
+
+def set_blas_threads(threads: int) -> list[tuple[str, object, int]]:
+    """Set the threads of every OpenBLAS loaded in this process (Linux).
+
+    Returns ``(library, setter, previous threads)`` for each library set, for
+    :func:`restore_blas_threads` (previous is 0 where the library cannot tell).
+    scipy's own OpenBLAS is loaded first, so that it is set too.
+    """
+    import scipy.linalg  # noqa: F401
+
     try:
         with open("/proc/self/maps") as fh:
             paths = sorted({line.split()[-1] for line in fh
                             if "openblas" in line.rsplit("/", 1)[-1].lower()})
     except OSError:
         return []
-    done = []
     import ctypes
 
+    done = []
     for path in paths:
         try:
             lib = ctypes.CDLL(path)
@@ -866,10 +886,19 @@ def single_thread_blas() -> list[str]:
         for symbol in _BLAS_SET_THREADS:
             setter = getattr(lib, symbol, None)
             if setter is not None:
-                setter(1)
-                done.append(path)
+                getter = getattr(lib, symbol.replace("_set_", "_get_"), None)
+                previous = int(getter()) if getter is not None else 0
+                setter(threads)
+                done.append((path, setter, previous))
                 break
     return done
+
+
+def restore_blas_threads(changed: list[tuple[str, object, int]]) -> None:
+    """Undo :func:`set_blas_threads`."""
+    for _, setter, previous in changed:
+        if previous > 0:
+            setter(previous)
 
 
 def die_with_parent(parent: int) -> None:

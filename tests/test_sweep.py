@@ -48,7 +48,9 @@ from chaospound.sweep import (
     SweepSpec,
     axes_from_scene,
     parse_axis,
+    restore_blas_threads,
     run_sweep,
+    set_blas_threads,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -133,6 +135,21 @@ def test_sweep_table_of_a_scene_file(tmp_path, capsys):
 
 
 # --------------------------------------------- 1 vs 2 workers: bitwise equal
+
+
+def test_an_in_process_sweep_gives_back_the_blas_threads(tmp_path):
+    """One worker runs in the caller's process with one BLAS thread (its small matrices
+    are faster so), and the caller's thread count is restored afterwards."""
+    before = set_blas_threads(2)
+    try:
+        expected = [threads for _, _, threads in set_blas_threads(2)]
+        if not expected or expected == [1] * len(expected):
+            pytest.skip("no OpenBLAS with more than one thread in this process")
+        run_sweep(WALL, spec_of(WALL, "period_ratio=0.5:1.0#3"), tmp_path / "x.h5",
+                  progress=False)
+        assert [threads for _, _, threads in set_blas_threads(2)] == expected
+    finally:
+        restore_blas_threads(before)
 
 
 @pytest.mark.parametrize("case", ["1-D fresh", "2-D both"])
