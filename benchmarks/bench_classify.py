@@ -31,9 +31,14 @@ quasi-periodic and unresolved point, 1000 sections from its stored final state a
 the classification's tolerances, the observable of rule 6 (the scaled sections on
 their first principal direction). Writes results/classify_birkhoff.json.
 
+``table``: the careful classifier (:func:`~chaospound.dynamics.classify.classify`, its
+defaults) at the T/T_Ax of docs/classification.md's "Measured" table, fig4 and
+fig4-translational; prints the table's rows.
+
 Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds 3
      PYTHONPATH=. python benchmarks/bench_classify.py agreement --per-set 67
      PYTHONPATH=. python benchmarks/bench_classify.py birkhoff
+     PYTHONPATH=. python benchmarks/bench_classify.py table
 """
 
 from __future__ import annotations
@@ -229,6 +234,39 @@ def birkhoff() -> dict:
     return out
 
 
+TABLE_RATIOS = (0.30, 0.45, 0.50, 0.60, 0.65, 0.70, 0.75, 0.80, 0.85, 0.90, 0.95, 1.00, 1.05,
+                1.10, 1.20, 1.25, 1.30, 1.40, 1.60, 1.80, 2.00)
+
+
+def _cell(regime) -> tuple[str, str]:
+    """(label, evidence) cells of one classification."""
+    label = regime.label
+    if regime.corner_sequence and regime.regime != "none":
+        label += " (" + " ".join(regime.corner_sequence) + ")"
+    if regime.max_exponent is not None and regime.period_cycles is None:
+        k = "-" if regime.zero_one is None else f"{regime.zero_one:.2f}"
+        evidence = f"{regime.max_exponent:.3f} +- {regime.max_exponent_error:.3f}, K {k}"
+    else:
+        evidence = f"{regime.strobe_mismatch:.1e}"
+    return label, evidence
+
+
+def table() -> dict:
+    rows = {}
+    for ratio in TABLE_RATIOS:
+        torsional = classify(load_preset("fig4").with_params(period_ratio=ratio))
+        translational = classify(load_preset("fig4-translational").with_params(
+            period_ratio=ratio))
+        label, evidence = _cell(torsional)
+        other, other_evidence = _cell(translational)
+        if translational.regime not in ("none", "periodic", "group-periodic"):
+            other += f" ({other_evidence})"
+        row = f"| {ratio:.2f} | {label} | {evidence} | {torsional.transient_used} | {other} |"
+        rows[f"{ratio:.2f}"] = row
+        print(row, flush=True)
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="part", required=True)
@@ -242,11 +280,14 @@ def main() -> None:
     ag.add_argument("--careful-transient", type=int, default=6000)
     ag.add_argument("--careful-exponent", type=int, default=400)
     sub.add_parser("birkhoff")
+    sub.add_parser("table")
     args = parser.parse_args()
     RESULTS.mkdir(exist_ok=True)
     if args.part == "speed":
         out = speed(args.points, args.rounds, args.workers2)
         (RESULTS / "bench_classify.json").write_text(json.dumps(out, indent=1) + "\n")
+    elif args.part == "table":
+        out = table()
     elif args.part == "birkhoff":
         out = birkhoff()
         (RESULTS / "classify_birkhoff.json").write_text(json.dumps(out, indent=1) + "\n")

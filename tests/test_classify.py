@@ -312,8 +312,14 @@ def test_fig4_at_0_9_is_chaotic():
     assert regime.max_exponent > 3 * regime.max_exponent_error
     assert abs(regime.max_exponent - 0.09) < 3 * regime.max_exponent_error + 0.01
     assert regime.zero_one > 0.8
+    assert regime.evidence["birkhoff_digits"] < 5  # chaos: the averages converge as N^(-1/2)
     assert regime.strobe_mismatch > 1e3 * regime.evidence["tol"]
     assert regime.transient_used == 2000  # never converged
+    from chaospound.cli.classify import _classify_report
+
+    [row] = [line for line in _classify_report(load_preset("fig4"), regime, None).splitlines()
+             if "Birkhoff average" in line]
+    assert f"{regime.evidence['birkhoff_digits']:.1f} digits (regular at >= 5)" in row
 
 
 @pytest.mark.parametrize(("period_ratio", "label"), [(0.7, "periodic 1-1"), (1.3, "periodic 1-2")])

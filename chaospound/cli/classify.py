@@ -195,6 +195,10 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
         ("solver", f"{solver.method}, {accuracy}"),
         ("wall time", f"{_command_seconds():.3g} s the whole command"),
     ]  # fmt: skip
+    digits = evidence.get("birkhoff_digits")
+    if digits is not None:  # rule 6's other test of regularity, beside the 0-1 test
+        at = [name for name, _ in rows].index("0-1 test K") + 1
+        rows.insert(at, ("Birkhoff average", f"{digits:.1f} digits (regular at >= 5)"))
     if plot is not None:
         rows.append(("wrote", plot))
     return _table(None, rows, "ll") + "\n"
