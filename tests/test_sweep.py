@@ -42,7 +42,7 @@ from chaospound import cli
 from chaospound.cli import main
 from chaospound.plot import plot_bifurcation
 from chaospound.scene import Scene, load_preset
-from chaospound.store import REGIMES, SweepStoreError, open_sweep
+from chaospound.store import REGIMES, SweepStoreError, open_sweep, sweep_progress
 from chaospound.sweep import (
     CONTINUATIONS,
     SweepSpec,
@@ -332,9 +332,12 @@ def interrupt_midway(path: Path, sig: int, *extra: str) -> tuple[int, int, str, 
         try:
             done, deadline = 0, time.monotonic() + 120
             while proc.poll() is None and time.monotonic() < deadline:
-                try:  # the running sweep holds the file: open_sweep reads its committed points
-                    done = sum(s != "pending" for s in open_sweep(path).status())
-                except SweepStoreError:
+                try:  # the running sweep holds the file; its journal counts the committed
+                    # points cheaply (open_sweep would read every point's data at each poll:
+                    # seconds on a loaded machine once thousands are in, so polls skipped
+                    # the window below and the sweep ran to the end)
+                    done = sweep_progress(path)[0]
+                except (SweepStoreError, OSError):
                     done = 0
                 if n // 4 <= done < n // 2:
                     if sig == signal.SIGINT:
