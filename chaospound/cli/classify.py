@@ -169,6 +169,9 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
             " per cycle"
         )
     zero_one = "-" if regime.zero_one is None else f"{regime.zero_one:.3f}"
+    digits = evidence.get("birkhoff_digits")  # rule 6's other test of regularity
+    birkhoff = [] if digits is None else [
+        ("Birkhoff average", f"{digits:.1f} digits (regular at >= 5)")]
     solver = scene if _is_system(scene) else scene.solver
     accuracy = (
         f"{solver.steps_per_cycle} steps per cycle"
@@ -189,16 +192,13 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
                             f"at P = {evidence.get('best_period')})"),
         ("largest exponent", exponent),
         ("0-1 test K", zero_one),
+        *birkhoff,
         ("confidence", f"{regime.confidence:.2f}"),
         ("transient used", f"{regime.transient_used} cycles, then a {evidence.get('window_cycles')}"
                            "-cycle window"),
         ("solver", f"{solver.method}, {accuracy}"),
         ("wall time", f"{_command_seconds():.3g} s the whole command"),
     ]  # fmt: skip
-    digits = evidence.get("birkhoff_digits")
-    if digits is not None:  # rule 6's other test of regularity, beside the 0-1 test
-        at = [name for name, _ in rows].index("0-1 test K") + 1
-        rows.insert(at, ("Birkhoff average", f"{digits:.1f} digits (regular at >= 5)"))
     if plot is not None:
         rows.append(("wrote", plot))
     return _table(None, rows, "ll") + "\n"

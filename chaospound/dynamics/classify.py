@@ -849,12 +849,13 @@ def _aperiodic_regime(exponent, error, zero_one, evidence) -> tuple[str, float]:
             parts = [_clip((z - SIGMAS) / (Z_FULL_CONFIDENCE - SIGMAS)), k_chaos]
             return "chaotic", min(p for p in parts if p is not None)
         digits = evidence.get("birkhoff_digits")
-        regular = [k for k in (k_regular, None if digits is None else _clip(
-            (digits - BIRKHOFF_DIGITS_REGULAR) / BIRKHOFF_DECADES)) if k is not None]
-        if abs(z) <= SIGMAS and (
-                (zero_one is not None and zero_one < ZERO_ONE_REGULAR)
-                or (digits is not None and digits >= BIRKHOFF_DIGITS_REGULAR)):
-            return "quasi-periodic", min(_clip(1.0 - abs(z) / SIGMAS), max(regular))
+        k_digits = None if digits is None else _clip(
+            (digits - BIRKHOFF_DIGITS_REGULAR) / BIRKHOFF_DECADES)
+        by_zero_one = zero_one is not None and zero_one < ZERO_ONE_REGULAR
+        by_birkhoff = digits is not None and digits >= BIRKHOFF_DIGITS_REGULAR
+        if abs(z) <= SIGMAS and (by_zero_one or by_birkhoff):
+            regular = max(k for k in (k_regular, k_digits) if k is not None)
+            return "quasi-periodic", min(_clip(1.0 - abs(z) / SIGMAS), regular)
         return "unresolved", 0.0
     if zero_one is None:
         return "unresolved", 0.0
