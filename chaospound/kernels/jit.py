@@ -52,14 +52,52 @@ class KernelDispatcher(CPUDispatcher):
         return super().get_call_template(args, kws)
 
 
-def _jit(cache: bool, **options):
+class InternalDispatcher(KernelDispatcher):
+    """A kernel compiled for other kernels: without the CPython wrapper, not cached.
+
+    A generated engine module (:mod:`chaospound.engine.compose`) holds about forty
+    kernels whose code is linked into the engine's loop, the one Python calls.
+    For each, numba would build a wrapper that converts Python objects (its IR
+    lowered, optimised and emitted as machine code) and, with the disk cache
+    on, pickle its machine code to disk: work wasted when the loop's machine
+    code, theirs included, is what the cache serves. These kernels skip both.
+    A call from Python (tests, an analysis reading a model function) is
+    served by a twin compiled with its wrapper on first use
+    (:func:`callable_from_python`; on the disk cache when the module's
+    ``_CACHED`` says so).
+    """
+
+    def add_overload(self, cres):
+        # not inserted in the type-dispatch table that Python calls go through,
+        # so every call from Python lands in _compile_for_args
+        self.overloads[tuple(cres.signature.args)] = cres
+
+    def _compile_for_args(self, *args, **kws):
+        # numba's C dispatcher calls what this returns with the same arguments
+        twin = getattr(self, "_twin", None)
+        if twin is None:
+            cache = bool(self.py_func.__globals__.get("_CACHED", False))
+            twin = self._twin = callable_from_python(self, cache)
+        return twin
+
+
+def callable_from_python(dispatcher, cache: bool = True):
+    """``dispatcher``, or if it is internal, its function compiled with its CPython wrapper
+    (and on the disk cache if ``cache``), with the same options otherwise (forceinline kept)."""
+    if not isinstance(dispatcher, InternalDispatcher):
+        return dispatcher
+    options = {k: v for k, v in dispatcher.targetoptions.items() if k != "no_cpython_wrapper"}
+    return _jit(cache, **options)(dispatcher.py_func)
+
+
+def _jit(cache: bool, dispatcher_class: type = KernelDispatcher, **options):
     """``njit(cache=cache, **options)`` building a :class:`KernelDispatcher`."""
     targetoptions = dict(options, nopython=True, boundscheck=None)
 
     def wrap(func):
         if config.DISABLE_JIT:
             return func
-        dispatcher = KernelDispatcher(py_func=func, locals={}, targetoptions=targetoptions)
+        dispatcher = dispatcher_class(py_func=func, locals={}, targetoptions=targetoptions)
         if cache:
             dispatcher.enable_caching()
         return dispatcher
@@ -94,3 +132,9 @@ def is_cached(dispatcher) -> bool | None:
 #: memory (a user system whose functions cannot be imported by name)
 kernel_uncached = _jit(False, _nrt=False, error_model="numpy")
 inline_uncached = _jit(False, _nrt=False, error_model="numpy", forceinline=True)
+#: as :data:`kernel_uncached` and :data:`inline_uncached`, callable from kernels only
+#: (:class:`InternalDispatcher`): the kernels of a generated engine that Python never calls
+kernel_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
+                       no_cpython_wrapper=True)
+inline_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
+                       no_cpython_wrapper=True, forceinline=True)
