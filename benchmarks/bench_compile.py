@@ -79,7 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     result = {"engines": ["wall", "pair", "tower-wall", "towers"], "rounds": args.rounds,
               "old_cpu_s_median": float(np.median(cpu_old)),
               "new_cpu_s_median": float(np.median(cpu_new)),
-              "ratio_median": float(np.median(ratios)), "old": commit(old) or str(old), "new": commit(new) or str(new)}
+              "ratio_median": float(np.median(ratios)),
+              "old": commit(old) or str(old), "new": commit(new) or str(new)}
     print(f"median CPU old {result['old_cpu_s_median']:.2f} s, new "
           f"{result['new_cpu_s_median']:.2f} s, ratio new/old {result['ratio_median']:.3f}")
     if args.output:
