@@ -20,9 +20,11 @@ they had been written there:
   nothing is ever invalidated by hand; it is written atomically (a private
   temporary file, fsync, ``os.replace``), so concurrent first runs (sweep
   workers, Dask) are safe;
-* its kernels are ``cache=True``: numba's disk cache serves the second process
+* its loop ``run`` is ``cache=True``: numba's disk cache serves the second process
   (docs/design/composition.md measured this variant: the same machine code as
-  direct calls, and cache hits).
+  direct calls, and cache hits); the kernels linked into the loop are compiled
+  for kernels only, without a CPython wrapper or a cache entry of their own
+  (:class:`chaospound.kernels.jit.InternalDispatcher`).
 
 A user system (:func:`chaospound.dynamics.system.custom_system`) is composed the
 same way, its functions imported from their own module by name; functions that

@@ -20,6 +20,10 @@ All three cache their machine code on disk (``__pycache__``, or
 ``NUMBA_CACHE_DIR``; :mod:`.cache` clears that cache when a kernel module
 changes). What they cost and save per step is measured by
 ``benchmarks/bench_simulate.py`` (results/bench_simulate.json).
+
+A generated engine module binds ``kernel`` and ``inline`` to
+:data:`kernel_internal` and :data:`inline_internal` instead: the same code,
+compiled for other kernels only (:class:`InternalDispatcher`), except its loop.
 """
 
 from numba import config, njit
@@ -128,12 +132,8 @@ def is_cached(dispatcher) -> bool | None:
 
 
 
-#: as :data:`kernel` and :data:`inline`, without the disk cache: for engines built in
-#: memory (a user system whose functions cannot be imported by name)
-kernel_uncached = _jit(False, _nrt=False, error_model="numpy")
-inline_uncached = _jit(False, _nrt=False, error_model="numpy", forceinline=True)
-#: as :data:`kernel_uncached` and :data:`inline_uncached`, callable from kernels only
-#: (:class:`InternalDispatcher`): the kernels of a generated engine that Python never calls
+#: as :data:`kernel` and :data:`inline`, for other kernels (:class:`InternalDispatcher`:
+#: no CPython wrapper, no disk cache; Python gets a twin): a generated engine's kernels
 kernel_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
                        no_cpython_wrapper=True)
 inline_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
