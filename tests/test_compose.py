@@ -2,16 +2,25 @@
 
 An engine's kernels other than its loop are compiled for other kernels only
 (:class:`chaospound.kernels.jit.InternalDispatcher`: no CPython wrapper, not on
-the disk cache). A call from Python still works, through a twin compiled with
-its wrapper, and returns what the same function gives run as plain Python.
+the disk cache, no machine code of their own: their optimised code is linked into
+the loop's). A call from Python still works, through a twin compiled with its
+wrapper, and returns what the same function gives run as plain Python.
+
+The first process to load an engine compiles its loop under a lock beside the
+module's file, so that others starting on it together wait and load the cache.
 """
 
 from __future__ import annotations
 
+import multiprocessing
+import time
+
+import numba
 import numpy as np
 
-from chaospound import load_preset
+from chaospound import load_preset, simulate
 from chaospound.dynamics.system import System
+from chaospound.engine.compose import _machine_lock
 from chaospound.kernels.jit import InternalDispatcher, KernelDispatcher
 
 
@@ -31,3 +40,41 @@ def test_internal_kernels_answer_python_like_their_python_source():
         ends.py_func(t, y, system.params, python)
         np.testing.assert_allclose(compiled, python, rtol=1e-13, atol=1e-15)
     assert type(ends._twin) is KernelDispatcher  # compiled once, with its wrapper
+
+
+def test_internal_kernels_emit_no_machine_code_of_their_own():
+    system = System.from_scene(load_preset("fig3a"))
+    simulate(system, transient=0, cycles=1)  # the loop: compiled, or loaded from the cache
+    module = system.engine().module
+    ends = module.model_ends
+    args = (0.0, system.initial_state, system.params, np.empty(4))
+    ends.compile(tuple(numba.typeof(a) for a in args))  # as the loop's compile would
+    (result,) = ends.overloads.values()
+    engine = result.library.codegen._engine
+    assert "define " in result.library.get_llvm_str()  # its optimised IR, to link
+    assert not engine.is_symbol_defined(result.fndesc.mangled_name)  # no machine code
+    (loop,) = module.run.overloads.values()
+    assert loop.library.get_pointer_to_function(loop.fndesc.llvm_cpython_wrapper_name)
+
+
+def _hold(path, log):
+    with _machine_lock(path):
+        with open(log, "a") as f:
+            f.write("acquired\n")
+        time.sleep(0.3)
+        with open(log, "a") as f:
+            f.write("released\n")
+
+
+def test_the_compile_lock_excludes_other_processes(tmp_path):
+    lock, log = tmp_path / "engine_x.lock", tmp_path / "log"
+    child = multiprocessing.get_context("spawn").Process(target=_hold, args=(lock, log))
+    child.start()
+    while not (log.exists() and "acquired" in log.read_text()):
+        time.sleep(0.01)
+    with _machine_lock(lock):  # waits for the child
+        assert log.read_text().split() == ["acquired", "released"]
+    child.join()
+    assert child.exitcode == 0
+    with _machine_lock(None):  # no path: no lock, no error
+        pass

@@ -23,8 +23,11 @@ they had been written there:
 * its loop ``run`` is ``cache=True``: numba's disk cache serves the second process
   (docs/design/composition.md measured this variant: the same machine code as
   direct calls, and cache hits); the kernels linked into the loop are compiled
-  for kernels only, without a CPython wrapper or a cache entry of their own
-  (:class:`chaospound.kernels.jit.InternalDispatcher`).
+  for kernels only, without a CPython wrapper, a cache entry or machine code of
+  their own (:class:`chaospound.kernels.jit.InternalDispatcher`);
+* processes that start on one composition together (sweep workers, Dask,
+  pytest-xdist) take turns: the first compiles the loop under a lock beside the
+  module's file, the others load what it cached (:meth:`Engine._load_loop`).
 
 A user system (:func:`chaospound.dynamics.system.custom_system`) is composed the
 same way, its functions imported from their own module by name; functions that
@@ -35,6 +38,7 @@ into a module built in memory instead, compiled once per process.
 from __future__ import annotations
 
 import ast
+import contextlib
 import hashlib
 import importlib
 import os
@@ -46,6 +50,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX: concurrent first runs compile twice
+    fcntl = None
 
 from ..kernels.params import N_PARAMS, P_BETA, P_PERIOD_RATIO
 from ..solvers.tableaux import MAX_DENSE, MAX_STAGES, METHODS
@@ -488,6 +497,7 @@ class Engine:
         self.composition = composition
         self.module = module
         self.cached_file = cached_file
+        self._loaded = False
 
     def __repr__(self) -> str:
         return f"Engine({self.composition.label()})"
@@ -499,9 +509,27 @@ class Engine:
         vectors = np.empty((MAX_STAGES + MAX_DENSE + 5, n))
         scalars = np.empty(N_SCALARS)
         ev_end = np.empty(MAX_EVENTS, dtype=np.int64)
-        return self.module.run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps,
-                               restart, n_samples, strobe, traj, imp, imp_state, stats,
-                               tangent_log, vectors, scalars, ev_end)
+        args = (p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n_samples,
+                strobe, traj, imp, imp_state, stats, tangent_log, vectors, scalars, ev_end)
+        if not self._loaded:
+            self._load_loop(args)
+        return self.module.run(*args)
+
+    def _load_loop(self, args: tuple) -> None:
+        """Compile the loop for ``args``, or load it from the disk cache, one process at a time.
+
+        Processes that start on one composition together (sweep workers, Dask,
+        pytest-xdist) would each compile it (10 s or more of CPU). Holding a lock
+        beside the module's file while compiling lets the first compile and the
+        others load its cache entry.
+        """
+        run = self.module.run
+        if hasattr(run, "typeof_pyval"):  # not under NUMBA_DISABLE_JIT
+            signature = tuple(run.typeof_pyval(a) for a in args)
+            lock = Path(self.module.__file__).with_suffix(".lock") if self.cached_file else None
+            with _machine_lock(lock):
+                run.compile(signature)
+        self._loaded = True
 
     def is_cached(self) -> bool | None:
         """Whether the loop's machine code is in numba's disk cache (None: unknown)."""
@@ -510,6 +538,23 @@ class Engine:
         from ..kernels.jit import is_cached
 
         return is_cached(self.module.run)
+
+
+@contextlib.contextmanager
+def _machine_lock(path: Path | None):
+    """Hold an exclusive ``flock`` on ``path`` (none when ``path`` is None, not POSIX or
+    not writable); the kernel releases it if the holder dies."""
+    fd = None
+    if path is not None and fcntl is not None:
+        with contextlib.suppress(OSError):
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+    try:
+        if fd is not None:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)
 
 
 _ENGINES: dict[Composition, Engine] = {}

@@ -19,16 +19,21 @@ allocates in Python).
 All three cache their machine code on disk (``__pycache__``, or
 ``NUMBA_CACHE_DIR``; :mod:`.cache` clears that cache when a kernel module
 changes). What they cost and save per step is measured by
-``benchmarks/bench_simulate.py`` (results/bench_simulate.json).
+``benchmarks/bench_simulate.py`` (results/bench_simulate.json). None builds the
+C-callable wrapper numba adds by default (``no_cfunc_wrapper``): nothing calls
+a kernel through a C function pointer, so it was compiled for nothing.
 
 A generated engine module binds ``kernel`` and ``inline`` to
 :data:`kernel_internal` and :data:`inline_internal` instead: the same code,
 compiled for other kernels only (:class:`InternalDispatcher`), except its loop.
 """
 
-from numba import config, njit
-from numba.core import types
+from numba import _dynfunc, config, njit
+from numba.core import compiler, types
+from numba.core.codegen import JITCodeLibrary
+from numba.core.compiler_machinery import register_pass
 from numba.core.registry import CPUDispatcher
+from numba.core.typed_passes import NativeLowering
 
 from .cache import invalidate_stale_cache
 
@@ -56,20 +61,90 @@ class KernelDispatcher(CPUDispatcher):
         return super().get_call_template(args, kws)
 
 
+class _LinkOnlyLibrary(JITCodeLibrary):
+    """A code library whose module is only ever linked into other libraries.
+
+    Finalising it optimises its module as numba always does (so the loop links
+    optimised code), but does not hand the module to the JIT engine: the engine
+    would emit machine code for it, and for every kernel it links in, that nothing
+    calls. This and the two classes below override numba internals (checked by
+    :data:`_LINK_ONLY`; tests/test_compose.py checks the effect): with a numba
+    that lacks them, internal kernels compile as before, machine code and all.
+    """
+
+    def _finalize_final_module(self):
+        self._finalize_dynamic_globals()
+        self._verify_declare_only_symbols()
+        self._finalized = True
+
+    def get_pointer_to_function(self, name):
+        return 0
+
+
+@register_pass(mutates_CFG=True, analysis_only=False)
+class _LinkOnlyLowering(NativeLowering):
+    """numba's lowering pass, into a :class:`_LinkOnlyLibrary`, with no executable made."""
+
+    _name = "chaospound_link_only_lowering"
+
+    def run_pass(self, state):
+        if state.library is None:
+            state.library = _LinkOnlyLibrary(state.targetctx.codegen(),
+                                             state.func_id.func_qualname)
+        state.flags.no_compile = True
+        super().run_pass(state)
+        lowered, library = state.cr, state.library
+        fndesc = lowered.fndesc
+        # the key callers find the function by: a function object that is never called
+        # (Python calls go to the twin), so it needs no machine code
+        entry = _dynfunc.make_function(fndesc.lookup_module(), fndesc.qualname.split(".")[-1],
+                                       "internal kernel", 0, lowered.env, (library,))
+        state.targetctx.insert_user_function(entry, fndesc, [library])
+        state.reload_init.extend(library._reload_init)
+        state["cr"] = compiler._LowerResult(fndesc, lowered.call_helper, cfunc=entry,
+                                            env=lowered.env)
+        return True
+
+
+class _LinkOnlyCompiler(compiler.Compiler):
+    """numba's nopython pipeline with :class:`_LinkOnlyLowering` for its lowering."""
+
+    def define_pipelines(self):
+        pipeline = compiler.DefaultPassBuilder.define_nopython_pipeline(self.state)
+        pipeline.passes = [(_LinkOnlyLowering if p is NativeLowering else p, d)
+                           for p, d in pipeline.passes]
+        pipeline.finalize()
+        return [pipeline]
+
+
+#: whether this numba has the internals the link-only pipeline overrides
+_LINK_ONLY = (hasattr(compiler, "_LowerResult") and hasattr(_dynfunc, "make_function")
+              and all(hasattr(JITCodeLibrary, name) for name in (
+                  "_finalize_final_module", "_finalize_dynamic_globals",
+                  "_verify_declare_only_symbols")))
+
+
 class InternalDispatcher(KernelDispatcher):
-    """A kernel compiled for other kernels: without the CPython wrapper, not cached.
+    """A kernel compiled for other kernels: no wrappers, no machine code, not cached.
 
     A generated engine module (:mod:`chaospound.engine.compose`) holds about forty
     kernels whose code is linked into the engine's loop, the one Python calls.
     For each, numba would build a wrapper that converts Python objects (its IR
     lowered, optimised and emitted as machine code) and, with the disk cache
     on, pickle its machine code to disk: work wasted when the loop's machine
-    code, theirs included, is what the cache serves. These kernels skip both.
+    code, theirs included, is what the cache serves. These kernels skip both,
+    and their optimised LLVM module is only ever linked into their callers
+    (:class:`_LinkOnlyLibrary`): numba would otherwise emit machine code for
+    each of them, and again for every kernel each links in, that nothing runs.
     A call from Python (tests, an analysis reading a model function) is
     served by a twin compiled with its wrapper on first use
     (:func:`callable_from_python`; on the disk cache when the module's
     ``_CACHED`` says so).
     """
+
+    def __init__(self, py_func, locals=None, targetoptions=None):
+        super().__init__(py_func, locals=locals, targetoptions=targetoptions,
+                         pipeline_class=_LinkOnlyCompiler if _LINK_ONLY else compiler.Compiler)
 
     def add_overload(self, cres):
         # not inserted in the type-dispatch table that Python calls go through,
@@ -95,7 +170,8 @@ def callable_from_python(dispatcher, cache: bool = True):
 
 
 def _jit(cache: bool, dispatcher_class: type = KernelDispatcher, **options):
-    """``njit(cache=cache, **options)`` building a :class:`KernelDispatcher`."""
+    """``njit(cache=cache, **options)`` building a ``dispatcher_class`` (a
+    :class:`KernelDispatcher` unless told otherwise)."""
     targetoptions = dict(options, nopython=True, boundscheck=None)
 
     def wrap(func):
@@ -109,9 +185,9 @@ def _jit(cache: bool, dispatcher_class: type = KernelDispatcher, **options):
     return wrap
 
 
-kernel = _jit(True, _nrt=False, error_model="numpy")
-inline = _jit(True, _nrt=False, error_model="numpy", forceinline=True)
-driver = njit(cache=True, error_model="numpy")
+kernel = _jit(True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
+inline = _jit(True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True, forceinline=True)
+driver = njit(cache=True, error_model="numpy", no_cfunc_wrapper=True)
 
 
 def is_cached(dispatcher) -> bool | None:
@@ -135,6 +211,6 @@ def is_cached(dispatcher) -> bool | None:
 #: as :data:`kernel` and :data:`inline`, for other kernels (:class:`InternalDispatcher`:
 #: no CPython wrapper, no disk cache; Python gets a twin): a generated engine's kernels
 kernel_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
-                       no_cpython_wrapper=True)
+                       no_cpython_wrapper=True, no_cfunc_wrapper=True)
 inline_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
-                       no_cpython_wrapper=True, forceinline=True)
+                       no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=True)
