@@ -77,9 +77,6 @@ class _LinkOnlyLibrary(JITCodeLibrary):
         self._verify_declare_only_symbols()
         self._finalized = True
 
-    def get_pointer_to_function(self, name):
-        return 0
-
 
 @register_pass(mutates_CFG=True, analysis_only=False)
 class _LinkOnlyLowering(NativeLowering):
@@ -185,8 +182,10 @@ def _jit(cache: bool, dispatcher_class: type = KernelDispatcher, **options):
     return wrap
 
 
-kernel = _jit(True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
-inline = _jit(True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True, forceinline=True)
+#: the options every kernel shares: no runtime, numpy's division, no C-callable wrapper
+_KERNEL = dict(_nrt=False, error_model="numpy", no_cfunc_wrapper=True)
+kernel = _jit(True, **_KERNEL)
+inline = _jit(True, **_KERNEL, forceinline=True)
 driver = njit(cache=True, error_model="numpy", no_cfunc_wrapper=True)
 
 
@@ -207,10 +206,8 @@ def is_cached(dispatcher) -> bool | None:
     return any(isinstance(key, tuple) and len(key) > 1 and key[1] == magic for key in overloads)
 
 
-
 #: as :data:`kernel` and :data:`inline`, for other kernels (:class:`InternalDispatcher`:
 #: no CPython wrapper, no disk cache; Python gets a twin): a generated engine's kernels
-kernel_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
-                       no_cpython_wrapper=True, no_cfunc_wrapper=True)
-inline_internal = _jit(False, InternalDispatcher, _nrt=False, error_model="numpy",
-                       no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=True)
+kernel_internal = _jit(False, InternalDispatcher, **_KERNEL, no_cpython_wrapper=True)
+inline_internal = _jit(False, InternalDispatcher, **_KERNEL, no_cpython_wrapper=True,
+                       forceinline=True)
