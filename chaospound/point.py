@@ -31,51 +31,32 @@ def run_task(scene, spec, indices: Sequence[int],
     """Run grid points in order; with continuation each starts from the previous one.
 
     ``scene`` is a Scene (:func:`run_point`) or a custom System
-    (:func:`run_system_point`). With ``spec.classify == "converged"`` and no
-    continuation (the "fresh" branch), a point whose grid predecessor along
-    the last axis ran just before it in this task is warm-started from that
-    point's attractor (:func:`_run_converged`); the sweep cuts such tasks at
-    the blocks of :data:`WARM_BLOCK` points, so that which points are warm
-    does not depend on the workers or the task size.
+    (:func:`run_system_point`). Without continuation (the "fresh" branch)
+    every point starts from the scene's initial state, whatever ran before it
+    in the task: its label is the attractor reached from there, as
+    :func:`chaospound.dynamics.classify.classify` names it, and does not
+    depend on how the points are cut into tasks.
     """
     results = []
     state = start_state
     runner = run_point if isinstance(scene, Scene) else run_system_point
-    warm_fresh = (spec.classify == "converged" and not continuation
-                  and (isinstance(scene, Scene) or scene.has_gap))
-    inner = spec.shape[-1]
-    previous: PointResult | None = None
     for index in indices:
-        index = int(index)
-        if warm_fresh:
-            neighbour = (previous is not None and previous.status == 1
-                         and previous.index == index - 1 and index % inner != 0)
-            result = runner(scene, spec, index, previous.final_state if neighbour else None,
-                            previous=previous if neighbour else None)
-        else:
-            result = runner(scene, spec, index, state if continuation else None)
+        result = runner(scene, spec, int(index), state if continuation else None)
         results.append(result)
-        previous = result
         if continuation:
             state = result.final_state if result.status == 1 else None
     return results
 
 
 def run_point(scene: Scene, spec, index: int,
-              start_state: np.ndarray | None = None,
-              previous: PointResult | None = None) -> PointResult:
-    """Steady run, classification and optional exponents of one grid point.
-
-    ``previous``: the grid neighbour ``start_state`` comes from, on the
-    "fresh" branch of a converged sweep (a warm start checked against a fresh
-    one where the label jumps, :func:`_run_converged`).
-    """
-    return _run(scene, len(scene.initial_vector()), spec, index, start_state, previous)
+              start_state: np.ndarray | None = None) -> PointResult:
+    """Steady run, classification and optional exponents of one grid point
+    (from ``start_state``, a section state, on a continuation branch)."""
+    return _run(scene, len(scene.initial_vector()), spec, index, start_state)
 
 
 def run_system_point(system, spec, index: int,
-                     start_state: np.ndarray | None = None,
-                     previous: PointResult | None = None) -> PointResult:
+                     start_state: np.ndarray | None = None) -> PointResult:
     """:func:`run_point` for a user's System, swept over its named parameters.
 
     The point is ``system.with_params(**values)``, run for the system's transient
@@ -86,11 +67,11 @@ def run_system_point(system, spec, index: int,
     classify: its points are stored "unresolved", with their sections, exponents
     and statistics.
     """
-    return _run(system, system.dim, spec, index, start_state, previous)
+    return _run(system, system.dim, spec, index, start_state)
 
 
 def _run(target, n_state: int, spec, index: int,
-         start_state: np.ndarray | None, previous: PointResult | None = None) -> PointResult:
+         start_state: np.ndarray | None) -> PointResult:
     """One point of a Scene or a System (see :func:`run_point`, :func:`run_system_point`)."""
     from .dynamics.classify import classify, classify_sequence, length_weights
     from .dynamics.lyapunov import lyapunov_spectrum
@@ -109,7 +90,7 @@ def _run(target, n_state: int, spec, index: int,
         if initial:  # a basin scan: this point's own initial state (and phase)
             start_state, start_phase = _initial_condition(system, initial)
         if spec.classify == "converged" and (is_scene or point.has_gap):
-            return _run_converged(point, n_exp, spec, index, start_state, previous, started)
+            return _run_converged(point, n_exp, spec, index, start_state, started)
         sim = simulate(system, initial_state=start_state,
                        start_at_section=start_state is not None and start_phase is None,
                        start_phase=start_phase)
@@ -173,36 +154,19 @@ def _initial_condition(system, initial: dict[str, float]) -> tuple[np.ndarray, f
     return state, initial.get(INITIAL_PHASE)
 
 
-def _run_converged(point, n_exp: int, spec, index: int, start_state, previous,
+def _run_converged(point, n_exp: int, spec, index: int, start_state,
                    started: float) -> PointResult:
-    """One point classified by :func:`~chaospound.dynamics.converged.classify_converged`.
+    """One point classified by :func:`~chaospound.dynamics.converged.classify_converged`
+    (from the scene's initial state, or from ``start_state`` on a continuation branch).
 
     The stored record (impacts, sections, final state) is the window the label
-    was read from; an unresolved point's message says why. On the "fresh"
-    branch (``previous`` given) the point starts from its neighbour's
-    attractor; when its label differs from the neighbour's (a bifurcation, or
-    another attractor reached from the warm state) it is classified again
-    from the scene's initial state and the fresh start's result is kept, so
-    that the branch stays the fresh-start branch wherever attractors coexist
-    with different labels. Between chaotic and quasi-periodic (no attractor
-    with an identity to lose; the exponent's statistics decide) there is no
-    second run. On a continuation branch the warm start is the
-    branch (no fresh check).
+    was read from; an unresolved point's message says why.
     """
-    from .dynamics.converged import classify_converged, regime_key
+    from .dynamics.converged import classify_converged
     from .dynamics.lyapunov import lyapunov_spectrum
 
     record = point.run.record if isinstance(point, Scene) else point.record
-    expect_chaos = previous is not None and previous.regime == "chaotic"
-    outcome = classify_converged(point, start_state=start_state, expect_chaos=expect_chaos,
-                                 record=record)
-    if previous is not None:
-        before = (previous.regime, _none_if(previous.period_cycles),
-                  _none_if(previous.impacts_per_period))
-        aperiodic = {"chaotic", "quasi-periodic"}
-        if regime_key(outcome.regime) != before and not (
-                outcome.regime.regime in aperiodic and previous.regime in aperiodic):
-            outcome = classify_converged(point, record=record)
+    outcome = classify_converged(point, start_state=start_state, record=record)
     regime, record = outcome.regime, outcome.record
     exps = errs = None
     max_exp, max_err = regime.max_exponent, regime.max_exponent_error
@@ -229,10 +193,6 @@ def _run_converged(point, n_exp: int, spec, index: int, start_state, previous,
         impacts=_impact_columns(imp),
         strobe=record.strobe.state,
     )
-
-
-def _none_if(value: int) -> int | None:
-    return None if value < 0 else int(value)
 
 
 class _Unclassified:

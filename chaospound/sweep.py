@@ -72,9 +72,6 @@ __all__ = [
 
 CONTINUATIONS = ("none", "forward", "backward", "both")
 CLASSIFY_MODES = ("converged", "paper", "window", "full")
-#: converged mode, "fresh" branch: points warm-start from their predecessor within
-#: blocks of this many points along the last axis; a task never spans two blocks
-WARM_BLOCK = 16
 WINDOW_TOL = 1e-2  #: default stroboscopic tolerance of the window classification
 #: finished points are committed to the file at most this often (seconds) ...
 COMMIT_INTERVAL = 1.0
@@ -110,9 +107,8 @@ class SweepSpec:
         Periods averaged for the exponents (after 10 periods of alignment).
     classify : {"converged", "paper", "window", "full"}
         "converged" (default): :func:`chaospound.dynamics.converged.classify_converged`
-        per point, warm-started along the scan (on the "fresh" branch within
-        blocks of :data:`WARM_BLOCK` points, checked by a fresh start where the
-        label jumps; on a continuation branch from the previous point), periods
+        per point, from the scene's initial state (on a continuation branch
+        from the previous point's attractor), periods
         confirmed by Newton's method and their Floquet multipliers, exponents
         only until the 3-sigma decision is clear. "paper" (alias "window"): the
         regime from the point's own record window (the scene's
@@ -479,7 +475,6 @@ class _Task:
     start_state: np.ndarray | None
     continuation: bool
     last_of_chain: bool
-    replay: int = 0  #: leading points run again only to warm-start the rest (not written)
 
 
 class _Plan:
@@ -503,13 +498,7 @@ class _Plan:
             pending = writer.pending(branch)
             if branch == "fresh":
                 self._fresh_todo = order[pending[order]]
-                self._fresh_cuts = None
-                if spec.classify == "converged":  # tasks within warm-start blocks
-                    self._fresh_cuts = _block_cuts(self._fresh_todo, spec.shape[-1], chunk)
-                    self._inner = spec.shape[-1]
-                    n_tasks = len(self._fresh_cuts) - 1
-                else:
-                    n_tasks = math.ceil(self._fresh_todo.size / chunk)
+                n_tasks = math.ceil(self._fresh_todo.size / chunk)
                 self.flush_order[branch] = _FreshKeys(n_tasks)
                 self.total += int(self._fresh_todo.size)
                 continue
@@ -531,19 +520,8 @@ class _Plan:
         """The first task of every chain, then the fresh points' tasks, cut as needed."""
         yield from self._chain_starts
         todo, chunk = self._fresh_todo, self.chunk
-        cuts = getattr(self, "_fresh_cuts", None)
         for k in range(len(self.flush_order.get("fresh", ()))):
-            if cuts is None:
-                yield _Task("fresh", (k, 0), todo[k * chunk:(k + 1) * chunk], None, False, True)
-                continue
-            # a block resumed in its middle runs its stored head again (not written), so
-            # that its points warm-start exactly as in an uninterrupted run
-            part = todo[cuts[k]:cuts[k + 1]]
-            first = int(part[0])
-            head = first - (first % self._inner) % WARM_BLOCK
-            replay = np.arange(head, first, dtype=part.dtype)
-            yield _Task("fresh", (k, 0), np.concatenate([replay, part]), None, False, True,
-                        replay=int(replay.size))
+            yield _Task("fresh", (k, 0), todo[k * chunk:(k + 1) * chunk], None, False, True)
 
     def _segment(self, branch, chain, seg, state) -> _Task:
         todo = self.remaining[(branch, chain)]
@@ -558,16 +536,6 @@ class _Plan:
         last = results[-1]
         state = last.final_state if last.status == 1 else None
         return self._segment(task.branch, task.key[0], task.key[1] + 1, state)
-
-
-def _block_cuts(todo: np.ndarray, inner: int, chunk: int) -> np.ndarray:
-    """Task boundaries in ``todo``: at the start of every warm block (``chunk`` is
-    not used: a block is one task)."""
-    if todo.size == 0:
-        return np.zeros(1, dtype=np.int64)
-    block = (todo // inner) * inner + (todo % inner) // WARM_BLOCK
-    starts = np.flatnonzero(np.r_[True, block[1:] != block[:-1]])
-    return np.r_[starts, todo.size].astype(np.int64)
 
 
 class _FreshKeys(Sequence):
@@ -634,7 +602,7 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
             finished = backend.wait_some(list(in_flight))
             for fut in finished:
                 task = in_flight.pop(fut)
-                results = backend.result(fut)[task.replay:]
+                results = backend.result(fut)
                 nxt = plan.follow_up(task, results)
                 if nxt is not None:
                     follow_ups.appendleft(nxt)

@@ -5,9 +5,9 @@ fig4 at T/T_Ax = 0.9, the wall model's two periodic branches, a period-doubling
 cascade, the torus of a forced self-excited oscillator), against the
 careful adaptive classifier (an independent procedure: long transients, no
 Newton), against Newton's orbit itself (the stored record repeats to within
-the classification's tol), and for the warm starts: a scan run forward,
-backward and from fresh starts names every point alike where the attractor is
-unique.
+the classification's tol), and for the warm starts of continuation: a scan
+run forward, backward and from fresh starts names every point alike where the
+attractor is unique.
 """
 
 from __future__ import annotations
@@ -129,8 +129,9 @@ def test_wall_branches_none_and_periodic_1_1_coexist():
 ])
 def test_warm_starts_change_nothing_where_the_attractor_is_unique(tmp_path, preset, grid,
                                                                   regime):
-    """A short scan forward, backward and from fresh starts (the default, warm-started
-    in blocks) names every point alike, and ends on the same orbit."""
+    """A short scan forward, backward (each point warm-started from the one before) and
+    from fresh starts (the default) names every point alike, and ends on the same
+    orbit."""
     scene = load_preset(preset)
     axis = parse_axis(grid, scene)
     run_sweep(scene, SweepSpec(axes=(axis,), continuation="both"), tmp_path / "both.h5",

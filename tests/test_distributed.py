@@ -228,7 +228,7 @@ def test_results_arriving_out_of_order_are_written_in_order(cluster, reference, 
     monkeypatch.setattr(DaskBackend, "wait_some", recording)
     scene = scene_of(*options)
     path = tmp_path / "out-of-order.h5"
-    # the window procedure: one point per task (a converged sweep's task is a warm block)
+    # the window procedure: one point per task, the cheapest
     run_sweep(scene, spec_of(scene, grid, classify="paper"), path, client=cluster, chunk=1,
               progress=False)
     monkeypatch.undo()

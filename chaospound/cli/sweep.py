@@ -123,11 +123,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "--classify",
         choices=SWEEP_CLASSIFY,
         default="converged",
-        help="converged (default): every point run to its attractor, warm-started along "
-        "the scan, periods confirmed by Newton and Floquet multipliers, exponents until "
-        "the 3-sigma decision; paper (or window): the regime from each point's own record "
-        "window, the paper's transient + record (aperiodic points unresolved without "
-        "--lyapunov); full: the careful adaptive classifier per point (slow)",
+        help="converged (default): every point run to its attractor from the "
+        "scene's initial state, periods confirmed by Newton and Floquet multipliers, "
+        "exponents until the 3-sigma decision; paper (or window): the regime from each "
+        "point's own record window, the paper's transient + record (aperiodic points "
+        "unresolved without --lyapunov); full: the careful adaptive classifier per point "
+        "(slow)",
     )
     group.add_argument(
         "--window-tol",
