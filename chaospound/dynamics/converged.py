@@ -4,8 +4,9 @@
 :func:`chaospound.dynamics.classify.classify` (rules, tolerances and
 confidences of ``docs/classification.md``), doing less work per point:
 
-1. Start. From a warm state (the neighbouring point's last section along the
-   scan, ``start_state``) or from the scene's initial state at t = 0 (fresh).
+1. Start. From the scene's initial state at t = 0 (fresh, a sweep's default)
+   or from a warm state (``start_state``: on a continuation branch the
+   previous point's last section).
    A warm start runs ``WARM_FIRST`` cycles first, a fresh one ``FRESH_FIRST``.
 2. Sections. Then ``CHUNK`` cycles at a time. After each run the tail of the
    sections is tested as :func:`classify` rule 3 does (last max(2P, 10)
@@ -88,7 +89,7 @@ from .classify import (
 )
 from .system import System, advance, as_system
 
-__all__ = ["ConvergedResult", "classify_converged", "regime_key"]
+__all__ = ["ConvergedResult", "classify_converged"]
 
 WARM_FIRST = 10  #: cycles run first from a warm start
 FRESH_FIRST = 30  #: cycles run first from the scene's initial state
@@ -132,12 +133,6 @@ class ConvergedResult:
     final_state: np.ndarray
 
 
-def regime_key(regime: Regime) -> tuple:
-    """What must stay the same between neighbouring points for no jump:
-    the regime, its period and impacts per period (the label)."""
-    return (regime.regime, regime.period_cycles, regime.impacts_per_period)
-
-
 def classify_converged(
     system_or_scene: System | Scene,
     *,
@@ -146,7 +141,6 @@ def classify_converged(
     max_transient: int = 2000,
     tol: float | None = None,
     newton: bool = True,
-    expect_chaos: bool = False,
     record: int = MIN_WINDOW,
 ) -> ConvergedResult:
     """Classify the steady response of a scene or system, converged and fast.
@@ -168,10 +162,6 @@ def classify_converged(
     newton : bool
         Confirm periods by Newton's method and the Floquet multipliers
         (False: classify's rule 3 and 4 only, slower to converge).
-    expect_chaos : bool
-        The warm start comes from a chaotic neighbour: the exponent starts
-        after the first ``WARM_FIRST`` cycles instead of ``EXPONENT_AFTER``
-        (a period found in those cycles still wins).
     record : int
         Cycles of the record returned with the label (a sweep stores it; a
         periodic label's window has at least 3P cycles and is read at tol).
@@ -190,8 +180,7 @@ def classify_converged(
     if int(record) < 1:
         raise ValueError(f"record = {record}: must be an integer >= 1")
     return _Classifier(system_or_scene, max_period, max_transient, tol, newton,
-                       int(record)).run(
-        start_state, expect_chaos and start_state is not None)
+                       int(record)).run(start_state)
 
 
 class _Classifier:
@@ -236,7 +225,7 @@ class _Classifier:
         self._smap = None
 
     # ------------------------------------------------------------- driver
-    def run(self, start_state, expect_chaos: bool) -> ConvergedResult:
+    def run(self, start_state) -> ConvergedResult:
         from ..simulate import simulate
 
         warm = start_state is not None
@@ -251,8 +240,6 @@ class _Classifier:
             self.cycles = FRESH_FIRST
         self.sections = [first.strobe.state]
         since_exponent = 0 if warm else FRESH_FIRST - EXPONENT_AFTER // 2
-        if expect_chaos:
-            since_exponent = EXPONENT_AFTER
         while True:
             found = self._try_period()
             if found is not None:
