@@ -725,10 +725,16 @@ def _classification_system(system: System) -> tuple[System, float, float]:
         rtol = min(system.rtol, CLASSIFY_RTOL)
         atol = min(system.atol, ATOL_PER_RTOL * rtol)
         settings.update(rtol=rtol, atol=atol)
-    tightened = system.with_solver(**settings)
+    return _with_solver(system, settings), rtol, atol
+
+
+def _with_solver(system: System, settings: dict) -> System:
+    """``system.with_solver(**settings)``, its scene (what the runs report) carrying
+    the settings too; nothing is packed again."""
+    changed = system.with_solver(**settings)
     if system.scene is not None:
-        tightened = replace(tightened, scene=system.scene.with_params(**settings))
-    return tightened, rtol, atol
+        changed = replace(changed, scene=system.scene.with_params(**settings))
+    return changed
 
 
 def _phase_from_section(time, cycle, period, section_phase) -> np.ndarray:

@@ -84,6 +84,7 @@ from .classify import (
     _phase_from_section,
     _scale,
     _tail_length,
+    _with_solver,
     classify_sequence,
     length_weights,
 )
@@ -432,10 +433,10 @@ class _Classifier:
                           initial_state=state, start_at_section=True)
         tail = record.strobe.state[-_tail_length(self.max_period):] * self.weights
         settled = _converged_period(tail, self.max_period, self.tol)
-        near = _near_period(tail, self.max_period, NEWTON_TRY)
-        if settled is None and near is not None and (
-                self.newton and self.attempts.get(near, 0) < NEWTON_ATTEMPTS):
-            settled = near  # a weakly stable orbit, blurred at EXPONENT_RTOL: Newton decides
+        if settled is None and self.newton:
+            near = _near_period(tail, self.max_period, NEWTON_TRY)
+            if near is not None and self.attempts.get(near, 0) < NEWTON_ATTEMPTS:
+                settled = near  # a weakly stable orbit, blurred at EXPONENT_RTOL: Newton decides
         if settled is not None:  # a long transient ended within the record: confirm it
             self.cycles += ZERO_ONE_CYCLES
             self.sections = [record.strobe.state[-_tail_length(self.max_period):]]
@@ -524,11 +525,7 @@ def _exponent_system(target: System, rtol: float) -> System:
     a fixed-step method unchanged): what the exponent and the 0-1 test run on."""
     if target.method == "rk4" or rtol >= EXPONENT_RTOL:
         return target
-    settings = {"rtol": EXPONENT_RTOL, "atol": ATOL_PER_RTOL * EXPONENT_RTOL}
-    loose = target.with_solver(**settings)
-    if target.scene is not None:  # the scene the runs report carries the settings too
-        loose = replace(loose, scene=target.scene.with_params(**settings))
-    return loose
+    return _with_solver(target, {"rtol": EXPONENT_RTOL, "atol": ATOL_PER_RTOL * EXPONENT_RTOL})
 
 
 def _near_period(tail: np.ndarray, max_period: int, level: float) -> int | None:
