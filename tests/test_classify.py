@@ -21,8 +21,12 @@ from chaospound.cli import main
 from chaospound.dynamics.classify import (
     DEFAULT_TOL,
     REGIMES,
+    TAIL_MIN,
     Regime,
     _aperiodic_regime,
+    _converged_period,
+    _mismatch,
+    _scale,
     birkhoff_digits,
     classify,
     classify_sequence,
@@ -207,6 +211,36 @@ def test_zero_one_is_reproducible_and_accepts_explicit_c():
     assert zero_one_test(x, c_values=[1.0, 1.7, 2.3]) > 0.8
     with pytest.raises(ValueError, match="at least 20"):
         zero_one_test(x[:10])
+
+
+def test_rule_3_at_once_is_rule_3_period_by_period():
+    """The convergence test of every period at once (one table of section distances)
+    picks the period the definition does, P by P: the smallest P whose last
+    max(2P, TAIL_MIN) pairs P apart are within tol, none where a P does not fit."""
+
+    def by_definition(states, max_period, tol):
+        scale, last = _scale(states), states.shape[0] - 1
+        for p in range(1, max_period + 1):
+            comparisons = max(2 * p, TAIL_MIN)
+            if last < comparisons + p - 1:
+                return None
+            if _mismatch(states[last - comparisons - p + 1:], p, scale) < tol:
+                return p
+        return None
+
+    rng = np.random.default_rng(8)
+    found = 0
+    for _ in range(3000):
+        n, dim, period = rng.integers(3, 70), rng.integers(1, 13), rng.integers(1, 12)
+        orbit = rng.normal(size=(period, dim))
+        decay = np.exp(-rng.uniform(0.0, 0.3) * np.arange(n))[:, None]
+        states = (orbit[np.arange(n) % period]
+                  + 10.0 ** rng.uniform(-9, 0) * rng.normal(size=(n, dim)) * decay)
+        max_period, tol = int(rng.integers(1, 20)), 10.0 ** rng.uniform(-6, -1)
+        expected = by_definition(states, max_period, tol)
+        assert _converged_period(states, max_period, tol) == expected
+        found += expected is not None
+    assert 300 < found < 2700  # both outcomes are exercised
 
 
 @pytest.mark.parametrize("signal", ["chaotic", "offset noise", "quasi-periodic"])

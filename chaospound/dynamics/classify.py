@@ -97,6 +97,7 @@ excitation cycle); periods and transients in excitation cycles.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -770,16 +771,40 @@ def _mismatch(states: np.ndarray, period: int, scale: float) -> float:
 
 
 def _converged_period(states: np.ndarray, max_period: int, tol: float) -> int | None:
-    """Smallest P whose last max(2P, TAIL_MIN) mismatches are all below tol (rule 3)."""
-    scale = _scale(states)
-    last = states.shape[0] - 1
-    for p in range(1, max_period + 1):
-        comparisons = max(2 * p, TAIL_MIN)
-        if last < comparisons + p - 1:
-            break
-        if _mismatch(states[last - comparisons - p + 1:], p, scale) < tol:
-            return p
-    return None
+    """Smallest P whose last max(2P, TAIL_MIN) mismatches are all below tol (rule 3).
+
+    All the periods at once (:func:`_period_pairs`): a sweep point runs this after
+    every few cycles, so it must cost little beside them."""
+    pairs = _period_pairs(states.shape[0] - 1, int(max_period))
+    if pairs is None:
+        return None
+    periods, rows, earlier, counted = pairs
+    distance = np.linalg.norm(states[rows] - states[earlier], axis=2)
+    worst = np.max(distance * counted, axis=0) / _scale(states)
+    below = np.flatnonzero(worst < tol)
+    return int(periods[below[0]]) if below.size else None
+
+
+@functools.lru_cache(maxsize=64)
+def _period_pairs(last: int, max_period: int):
+    """The section pairs :func:`_converged_period` compares in a tail ending at ``last``.
+
+    Returns ``(periods, rows, earlier, counted)``: the periods P that fit (the first
+    that does not ends the search), the rows compared (newest first, shape (m, 1)),
+    the rows P before them (m, periods) and 1.0 where the pair is among P's last
+    max(2P, TAIL_MIN), else 0.0; None when no period fits.
+    """
+    periods = np.arange(1, max_period + 1)
+    comparisons = np.maximum(2 * periods, TAIL_MIN)
+    fits = last >= comparisons + periods - 1
+    stop = len(fits) if fits.all() else int(np.argmin(fits))
+    if stop == 0:
+        return None
+    periods, comparisons = periods[:stop], comparisons[:stop]
+    rows = last - np.arange(int(comparisons[-1]))[:, None]
+    earlier = rows - periods[None, :]
+    counted = (np.arange(rows.shape[0])[:, None] < comparisons[None, :]).astype(float)
+    return periods, rows, np.maximum(earlier, 0), counted
 
 
 @dataclass(frozen=True)
