@@ -103,6 +103,24 @@ def test_the_exponent_at_exponent_rtol_is_the_exponent_at_the_classification_rto
     assert abs(lam_t - lam_l) < 3 * math.hypot(err_t, err_l)
 
 
+@pytest.mark.parametrize("period_ratio", [1.0487, 1.0913])
+def test_a_transient_ending_during_the_exponent_is_confirmed_there(period_ratio):
+    """fig4 near the resonance: the sections wander for hundreds of cycles (the
+    exponent's blocks start), then settle on a stable orbit. The blocks' sections are
+    watched, so Newton confirms the orbit there, well before the exponent's cap and a
+    0-1 record; the careful classifier, waiting for the sections to converge, finds the
+    same orbit after a longer transient."""
+    point = FIG4.with_params(period_ratio=period_ratio)
+    regime = classify_converged(point).regime
+    decisions = [stage.get("decision") for stage in regime.evidence["exponent_stages"]]
+    assert decisions[-1] == "a period came in sight and was confirmed"
+    assert regime.evidence["confirmed_by"] == "newton"
+    assert regime.regime == "group-periodic"
+    careful = classify(point)
+    assert regime.label == careful.label
+    assert regime.transient_used < careful.transient_used
+
+
 def test_wall_branches_none_and_periodic_1_1_coexist():
     """wall, gap 5: between T/T_Ax 0.575 and 0.875 the rest state's branch has no
     impact while the impacting 1-1 orbit (reached from a state on it) is stable too."""

@@ -204,6 +204,20 @@ def test_the_monodromy_provider_is_pluggable(fig3a_orbit):
     np.testing.assert_allclose(x, orbit.state, atol=1e-9)
 
 
+def test_the_approximate_final_monodromy_has_the_exact_multipliers_to_its_rtol(fig3a_orbit):
+    """exact_monodromy=False (what a classifier asking only for stability uses) returns
+    the same fixed point, and a matrix whose multipliers are the exact ones to about
+    the map's jacobian_rtol (1e-6), not the map's own rtol."""
+    smap, orbit = fig3a_orbit
+    start = orbit.state + 1e-4
+    x, m, res, it = newton_fixed_point(smap, start, 1)
+    xa, ma, resa, ita = newton_fixed_point(smap, start, 1, exact_monodromy=False)
+    assert (res, it) == (resa, ita) and np.array_equal(x, xa)
+    exact, approximate = (np.sort(np.abs(np.linalg.eigvals(a))) for a in (m, ma))
+    assert np.max(np.abs(approximate - exact)) < 1e-4 * np.max(exact)
+    assert not np.array_equal(m, ma)  # it is the looser matrix indeed
+
+
 def test_newton_failure_is_one_clear_error():
     chaotic = StroboscopicMap.of(load_preset("fig4").with_params(period_ratio=0.9))
     with pytest.raises(OrbitNotFound, match="period-1 orbit: no convergence in 2 Newton"):

@@ -13,9 +13,10 @@ confidences of ``docs/classification.md``), doing less work per point:
    pairs P apart within tol / 10, the smallest P <= max_period).
 3. Newton. As soon as the tail repeats with some period P to within
    ``NEWTON_TRY`` (a loose 1e-2: the orbit is near, not reached), or rule 3
-   holds, Newton's method (:func:`chaospound.orbits.find_orbit`, the
-   classification's rtol, the variational monodromy) solves P^P(x) = x from
-   the last section. A converged orbit whose Floquet multipliers are all
+   holds, Newton's method (:func:`chaospound.orbits.shooting.newton_fixed_point`,
+   the classification's rtol, the variational monodromy) solves P^P(x) = x from
+   the last section. A converged orbit whose Floquet multipliers (the
+   monodromy at rtol 1e-6: its stability, not its digits, is asked) are all
    inside the unit circle is the attractor: a record of max(3P, 8) cycles from
    the orbit's state is classified by
    :func:`~chaospound.dynamics.classify.classify_sequence` at tol (its
@@ -37,7 +38,12 @@ confidences of ``docs/classification.md``), doing less work per point:
    ``MIN_BLOCKS`` blocks it stops as
    soon as |lambda| / sigma > ``Z_EARLY`` (a margin above the 3-sigma line
    for deciding early), or at ``EXPONENT_CAP`` cycles, where the 3-sigma line
-   itself decides. lambda above it: chaotic (the 0-1 test is not needed;
+   itself decides. The blocks' sections are watched too: after a block that
+   contracted (a negative block exponent) the tail is tested as in step 2 and
+   step 3 acts on it (a long transient ending on a stable orbit is confirmed
+   there, not after the cap and a 0-1 record); a failed attempt lets the
+   blocks go on, the next attempt waiting for a fresh tail.
+   lambda above it: chaotic (the 0-1 test is not needed;
    confidence as classify's exponent part). lambda below minus it: the motion
    contracts, a period is near: back to step 2 from the current state.
 5. 0-1 test, only where the exponent cannot decide (|lambda| / sigma <= 3
@@ -88,7 +94,7 @@ from .classify import (
     classify_sequence,
     length_weights,
 )
-from .system import System, advance, as_system
+from .system import System, advance, as_system, evolve
 
 __all__ = ["ConvergedResult", "classify_converged"]
 
@@ -278,47 +284,50 @@ class _Classifier:
 
     def _try_period(self) -> ConvergedResult | None:
         tail = self._tail()
-        converged = _converged_period(tail, self.max_period, TRANSIENT_MARGIN * self.tol)
-        candidate = converged if converged is not None else _near_period(
-            tail, self.max_period, NEWTON_TRY)
-        if candidate is None:
+        level = TRANSIENT_MARGIN * self.tol
+        near = _near_period(tail, self.max_period, max(NEWTON_TRY, level))
+        if near is None:  # (neither converged nor near: one test decides most calls)
             return None
+        converged = _converged_period(tail, self.max_period, level)
+        candidate = converged if converged is not None else near
         if self.newton and self.attempts.get(candidate, 0) < NEWTON_ATTEMPTS:
             self.attempts[candidate] = self.attempts.get(candidate, 0) + 1
             confirmed = self._newton(candidate)
             if confirmed is not None:
                 return confirmed
         if converged is not None:
-            return self._window_result(self._last(), converged, orbit=None)
+            return self._window_result(self._last(), converged, newton=None)
         return None
 
     def _newton(self, period: int) -> ConvergedResult | None:
-        from ..orbits import OrbitNotFound, find_orbit
+        from ..orbits import OrbitNotFound
         from ..orbits.maps import StroboscopicMap
+        from ..orbits.shooting import newton_fixed_point
         from ..simulate import SimulationError
 
         if self._smap is None:
             self._smap = StroboscopicMap.of(self.target, rtol=self.rtol, atol=self.atol,
                                             method=None)
         note = {"period": period, "after_cycles": self.cycles}
-        try:
-            orbit = find_orbit(self._smap, period=period, initial_state=self._last(),
-                               tol=NEWTON_TOL, max_iter=NEWTON_ITER)
+        try:  # the fixed point and its stability (the window reads the impacts)
+            state, monodromy, residual, iterations = newton_fixed_point(
+                self._smap, self._last(), period, tol=NEWTON_TOL, max_iter=NEWTON_ITER,
+                exact_monodromy=False)
+            mu = float(np.max(np.abs(np.linalg.eigvals(monodromy))))
         except (OrbitNotFound, SimulationError, np.linalg.LinAlgError) as exc:
             note["result"] = str(exc).splitlines()[0][:160]
             self.evidence["newton"].append(note)
             return None
-        mu = float(np.max(np.abs(orbit.multipliers)))
-        note.update(residual=orbit.residual, iterations=orbit.iterations, max_multiplier=mu)
+        note.update(residual=residual, iterations=iterations, max_multiplier=mu)
         if not mu < 1.0:
             note["result"] = "unstable orbit"
             self.evidence["newton"].append(note)
             return None
         note["result"] = "stable orbit"
         self.evidence["newton"].append(note)
-        return self._window_result(orbit.state, period, orbit=orbit)
+        return self._window_result(state, period, newton=(residual, mu))
 
-    def _window_result(self, state, period: int, orbit) -> ConvergedResult | None:
+    def _window_result(self, state, period: int, newton) -> ConvergedResult | None:
         """Record max(3P, record, 3) cycles from ``state`` and classify them at tol."""
         from ..simulate import simulate
 
@@ -333,7 +342,7 @@ class _Classifier:
                                    tol=self.tol, test01=False)
         if regime.regime in ("unresolved", "quasi-periodic", "chaotic") or (
                 regime.regime == "none" and regime.period_cycles is None):
-            if orbit is not None:
+            if newton is not None:
                 self.evidence["newton"][-1]["result"] += ": its window did not repeat"
             return None
         found = regime.period_cycles or 1
@@ -342,10 +351,10 @@ class _Classifier:
             record = simulate(self.target, transient=0, record=window, initial_state=state,
                               start_at_section=True)
         confidence = regime.confidence
-        if orbit is not None:
-            mu = float(np.max(np.abs(orbit.multipliers)))
+        if newton is not None:
+            residual, mu = newton
             confidence = min(confidence, _clip((1.0 - mu) / MU_MARGIN))
-            self.evidence.update(confirmed_by="newton", orbit_residual=orbit.residual,
+            self.evidence.update(confirmed_by="newton", orbit_residual=residual,
                                  max_multiplier=mu)
         else:
             self.evidence.update(confirmed_by="sections")
@@ -355,15 +364,19 @@ class _Classifier:
         """Step 4 (and 5 when the exponent cannot decide)."""
         n = self.flow.dim
         augmented = self._aligned_tangent(self._last())
+        self.sections = [augmented[None, :n].copy()]
         blocks: list[float] = []
-        augmented, ran, lam, err, z = self._blocks(augmented, blocks, EXPONENT_CAP)
-        ran += TANGENT_ALIGN
-        self.cycles += ran
+        stage: dict = {}
+        self.evidence["exponent_stages"].append(stage)
+        augmented, lam, err, z, found = self._blocks(augmented, blocks, EXPONENT_CAP,
+                                                     watch=True)
+        stage.update(cycles=BLOCK * len(blocks), blocks=len(blocks), exponent=lam,
+                     error=err, exponent_over_error=z)
+        if found is not None:
+            stage["decision"] = "a period came in sight and was confirmed"
+            return found
         state = augmented[:n].copy()
         self.sections = [state[None, :]]
-        stage = {"cycles": ran - TANGENT_ALIGN, "blocks": len(blocks), "exponent": lam,
-                 "error": err, "exponent_over_error": z}
-        self.evidence["exponent_stages"].append(stage)
         at_cap = abs(z) <= Z_EARLY  # the loop ended at the cap: the 3-sigma rule decides
         if z > (SIGMAS if at_cap else Z_EARLY):
             return self._chaotic(state, lam, err, z)
@@ -375,30 +388,49 @@ class _Classifier:
             return None  # the budget ran out: the driver says so
         return self._zero_one(state, lam, err, blocks)
 
-    def _blocks(self, augmented, blocks: list[float], cycles: int):
+    def _blocks(self, augmented, blocks: list[float], cycles: int, watch: bool = False):
         """Accumulate exponent blocks (appended to ``blocks``) from the tangent state
         ``augmented`` for at most ``cycles`` cycles (and the budget), stopping once
         ``|lambda| / sigma > Z_EARLY`` over all the blocks.
 
-        Returns ``(augmented, cycles run, lambda, sigma, lambda / sigma)``.
+        With ``watch`` the blocks' sections also go to ``self.sections``, and after
+        each block that contracted (a negative block exponent: the motion nears a
+        stable orbit, not one of chaos's unstable ones) :meth:`_try_period` acts on
+        the tail as in step 3 (a long transient ending); a confirmed period ends the
+        blocks, a failed attempt leaves them going on, with a fresh tail for the
+        next attempt.
+
+        Returns ``(augmented, lambda, sigma, lambda / sigma, result)``, ``result``
+        the confirmed period's or None.
         """
         period = self.flow.period
+        n = self.flow.dim
         ran = 0
         lam = err = math.nan
         z = 0.0
-        while ran < cycles and self.cycles + TANGENT_ALIGN + ran < self.max_transient:
-            log = np.zeros((BLOCK, 1))
-            augmented, _, _ = advance(self.flow, augmented, BLOCK, tangent="qr",
-                                      tangent_log=log, record_from=0)
-            blocks.append(float(log.sum()) / (BLOCK * period))
+        while ran < cycles and self.cycles < self.max_transient:
+            run = evolve(self.flow, augmented, cycles=BLOCK, start_at_section=True,
+                         tangent="qr")
+            augmented = run.augmented_state
+            blocks.append(float(run.tangent_log.sum()) / (BLOCK * period))
             ran += BLOCK
+            self.cycles += BLOCK
             if len(blocks) >= MIN_BLOCKS:
                 lam = float(np.mean(blocks))
                 err = float(np.std(blocks, ddof=1) / math.sqrt(len(blocks)))
                 z = lam / max(err, 1e-300)
-                if abs(z) > Z_EARLY:
-                    break
-        return augmented, ran, lam, err, z
+            if watch:
+                self.sections.append(run.sections[1:, :n])
+            if watch and blocks[-1] < 0.0:  # the block contracted: a stable orbit near?
+                tried = sum(self.attempts.values())
+                found = self._try_period()
+                if found is not None:
+                    return augmented, lam, err, z, found
+                if sum(self.attempts.values()) > tried:
+                    self.sections = [self.sections[-1][-1:]]
+            if abs(z) > Z_EARLY:
+                break
+        return augmented, lam, err, z, None
 
     def _record_sections(self, state) -> np.ndarray:
         from ..simulate import simulate
@@ -479,6 +511,7 @@ class _Classifier:
         augmented[n] = 1.0
         augmented, _, _ = advance(self.flow, augmented, TANGENT_ALIGN, tangent="qr",
                                   tangent_log=np.zeros((0, 1)), record_from=TANGENT_ALIGN)
+        self.cycles += TANGENT_ALIGN
         return augmented
 
     def _longer_exponent(self, record, blocks: list[float]) -> tuple[float, float]:
@@ -486,11 +519,10 @@ class _Classifier:
         Returns ``(lambda, sigma)`` over all the blocks."""
         augmented = self._aligned_tangent(record.strobe.state[-1])
         before = len(blocks)
-        _, ran, lam, err, z = self._blocks(augmented, blocks,
-                                           (LONGER_RUN - 1) * EXPONENT_CAP)
-        self.cycles += ran + TANGENT_ALIGN
+        _, lam, err, z, _ = self._blocks(augmented, blocks, (LONGER_RUN - 1) * EXPONENT_CAP)
         self.evidence["exponent_stages"].append({
-            "cycles": ran, "blocks": len(blocks) - before, "exponent": lam, "error": err,
+            "cycles": BLOCK * (len(blocks) - before), "blocks": len(blocks) - before,
+            "exponent": lam, "error": err,
             "exponent_over_error": z,
             "decision": "exponent and 0-1 test disagreed: the exponent went on"})
         return lam, err

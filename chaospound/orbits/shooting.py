@@ -134,7 +134,8 @@ class Orbit:
 
 def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                        tol: float = ORBIT_TOL, max_iter: int = 40, trust: float = 1.0,
-                       chord: bool = True) -> tuple[np.ndarray, np.ndarray, float, int]:
+                       chord: bool = True, exact_monodromy: bool = True,
+                       ) -> tuple[np.ndarray, np.ndarray, float, int]:
     """Solve P^k(x) = x by safeguarded Newton's method.
 
     Parameters
@@ -160,6 +161,11 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
         |M_used - M(x*)|); the returned matrix is always the map's own, evaluated at
         the returned state. Without ``chord`` every iteration evaluates the exact
         matrix (plain Newton).
+    exact_monodromy : bool
+        Return the map's own matrix at the fixed point (default); False: its
+        approximate one there (:meth:`StroboscopicMap.approximate_monodromy`, about
+        half the cost; multipliers to about its rtol), for a caller that needs only
+        the orbit's stability.
 
     Returns
     -------
@@ -188,7 +194,8 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                                     f"iteration {it}")
             if res <= tol:
                 if not fresh:
-                    _, m = smap.monodromy(x, k)
+                    _, m = (smap.monodromy if exact_monodromy
+                            else smap.approximate_monodromy)(x, k)
                 return x, m, res, it
             if it == max_iter:
                 break
