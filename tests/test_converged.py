@@ -26,7 +26,12 @@ from chaospound.dynamics.classify import (
     classify,
     length_weights,
 )
-from chaospound.dynamics.converged import EXPONENT_RTOL, _exponent_system, classify_converged
+from chaospound.dynamics.converged import (
+    EXPONENT_RTOL,
+    _exponent_system,
+    _mean_and_error,
+    classify_converged,
+)
 from chaospound.dynamics.system import advance, as_system
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate
@@ -119,6 +124,40 @@ def test_a_transient_ending_during_the_exponent_is_confirmed_there(period_ratio)
     careful = classify(point)
     assert regime.label == careful.label
     assert regime.transient_used < careful.transient_used
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.8])
+def test_the_exponent_error_widens_for_correlated_blocks(rho):
+    """The standard error of the block exponents' mean against its true spread over
+    3000 AR(1) series of 30 blocks: independent blocks keep the plain std / sqrt(N)
+    (within 10 %); blocks with lag-1 correlation 0.8 (a torus's drift) get an error at
+    least twice the plain one's, closer to the truth it understates threefold."""
+    rng = np.random.default_rng(3)
+    noise = rng.normal(size=(3000, 130))
+    series = np.zeros_like(noise)
+    for i in range(1, series.shape[1]):
+        series[:, i] = rho * series[:, i - 1] + noise[:, i]
+    series = series[:, 100:]
+    truth = series.mean(axis=1).std()
+    widened = np.median([_mean_and_error(list(row))[1] for row in series]) / truth
+    plain = np.median(series.std(axis=1, ddof=1)) / math.sqrt(series.shape[1]) / truth
+    if rho == 0.0:
+        assert 0.9 < widened < 1.1 and 0.9 < plain < 1.1
+    else:
+        assert plain < 0.4 and widened > 2.0 * plain and widened < 1.0
+
+
+def test_a_torus_whose_block_exponents_drift_together_is_not_chaotic():
+    """fig4 at T/T_Ax 1.0539: a torus whose 10-cycle block exponents swing slowly
+    (positive for dozens of blocks, then negative); the plain standard error of their
+    mean put lambda = 0.002 at 4.4 sigma after 5 blocks and the point was named
+    chaotic. With the correlation's widening it is quasi-periodic, as classify finds
+    after its 2000-cycle transient."""
+    point = FIG4.with_params(period_ratio=1.0539)
+    regime = classify_converged(point).regime
+    assert regime.regime == "quasi-periodic"
+    assert abs(regime.max_exponent) < 3 * regime.max_exponent_error
+    assert classify(point).regime == "quasi-periodic"
 
 
 def test_wall_branches_none_and_periodic_1_1_coexist():
