@@ -288,7 +288,7 @@ class _Classifier:
     def _try_period(self) -> ConvergedResult | None:
         tail = self._tail()
         level = TRANSIENT_MARGIN * self.tol
-        near = _near_period(tail, self.max_period, max(NEWTON_TRY, level))
+        near = _converged_period(tail, self.max_period, max(NEWTON_TRY, level))
         if near is None:  # (neither converged nor near: one test decides most calls)
             return None
         converged = _converged_period(tail, self.max_period, level)
@@ -468,7 +468,7 @@ class _Classifier:
         tail = record.strobe.state[-_tail_length(self.max_period):] * self.weights
         settled = _converged_period(tail, self.max_period, self.tol)
         if settled is None and self.newton:
-            near = _near_period(tail, self.max_period, NEWTON_TRY)
+            near = _converged_period(tail, self.max_period, NEWTON_TRY)
             if near is not None and self.attempts.get(near, 0) < NEWTON_ATTEMPTS:
                 settled = near  # a weakly stable orbit, blurred at EXPONENT_RTOL: Newton decides
         if settled is not None:  # a long transient ended within the record: confirm it
@@ -584,11 +584,6 @@ def _mean_and_error(blocks: list[float]) -> tuple[float, float]:
             rho = min(rho, 0.99)
             error *= math.sqrt((1.0 + rho) / (1.0 - rho))
     return mean, error
-
-
-def _near_period(tail: np.ndarray, max_period: int, level: float) -> int | None:
-    """Smallest P whose last max(2P, 10) section pairs P apart are within ``level``."""
-    return _converged_period(tail, max_period, level)
 
 
 def _best_mismatch(states: np.ndarray, scale: float) -> float:
