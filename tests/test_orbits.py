@@ -30,7 +30,7 @@ from chaospound.orbits import (
 from chaospound.orbits.continuation import continue_branch, switch_period_doubling
 from chaospound.orbits.floquet import response_floquet, spectrum_floquet
 from chaospound.orbits.grazing import clearance_minima, free_flight_clearance
-from chaospound.orbits.shooting import newton_fixed_point, orbit_at
+from chaospound.orbits.shooting import ORBIT_TOL, newton_fixed_point, orbit_at
 from chaospound.orbits.store import open_branches, write_branches
 from chaospound.scene import load_preset
 from chaospound.simulate import simulate
@@ -216,6 +216,52 @@ def test_the_approximate_final_monodromy_has_the_exact_multipliers_to_its_rtol(f
     exact, approximate = (np.sort(np.abs(np.linalg.eigvals(a))) for a in (m, ma))
     assert np.max(np.abs(approximate - exact)) < 1e-4 * np.max(exact)
     assert not np.array_equal(m, ma)  # it is the looser matrix indeed
+
+
+class _CountingMap:
+    """A map that counts the forcing periods its caller has it integrate."""
+
+    def __init__(self, smap):
+        self.smap, self.periods = smap, 0
+
+    def advance(self, x, k=1):
+        self.periods += k
+        return self.smap.advance(x, k)
+
+    def monodromy(self, x, k=1):
+        self.periods += k
+        return self.smap.monodromy(x, k)
+
+    def approximate_monodromy(self, x, k=1):
+        self.periods += k
+        return self.smap.approximate_monodromy(x, k)
+
+
+def test_give_up_early_finds_the_same_orbit(fig3a_orbit):
+    """The classifier's early-giving-up Newton converges to the orbit plain Newton
+    finds, with the same stability, from a start off the orbit."""
+    smap, orbit = fig3a_orbit
+    start = orbit.state + 1e-3
+    x, m, res, _ = newton_fixed_point(smap, start, 1)
+    xg, mg, resg, _ = newton_fixed_point(smap, start, 1, give_up_early=True)
+    assert res <= ORBIT_TOL and resg <= ORBIT_TOL
+    np.testing.assert_allclose(xg, x, atol=1e-8 * max(1.0, np.max(np.abs(x))))
+    np.testing.assert_allclose(np.abs(np.linalg.eigvals(mg)), np.abs(np.linalg.eigvals(m)),
+                               rtol=1e-6)
+
+
+def test_give_up_early_stops_sooner_on_a_chaotic_set():
+    """On fig4's chaotic attractor (T/T_Ax 0.9) no period-3 orbit is near the section
+    state: plain Newton spends its 15 iterations, the early-giving-up one stops at the
+    first step along which the residual does not fall, having run fewer periods."""
+    smap = StroboscopicMap.of(load_preset("fig4").with_params(period_ratio=0.9))
+    x = smap.advance(smap.system.initial_state, 200)
+    plain, early = _CountingMap(smap), _CountingMap(smap)
+    with pytest.raises(OrbitNotFound, match="no convergence in 15"):
+        newton_fixed_point(plain, x, 3, tol=1e-7, max_iter=15)
+    with pytest.raises(OrbitNotFound, match="no descent along Newton's step"):
+        newton_fixed_point(early, x, 3, tol=1e-7, max_iter=15, give_up_early=True)
+    assert early.periods < 0.5 * plain.periods
 
 
 def test_newton_failure_is_one_clear_error():

@@ -315,7 +315,7 @@ class _Classifier:
         try:  # the fixed point and its stability (the window reads the impacts)
             state, monodromy, residual, iterations = newton_fixed_point(
                 self._smap, self._last(), period, tol=NEWTON_TOL, max_iter=NEWTON_ITER,
-                exact_monodromy=False)
+                exact_monodromy=False, give_up_early=True)
             mu = float(np.max(np.abs(np.linalg.eigvals(monodromy))))
         except (OrbitNotFound, SimulationError, np.linalg.LinAlgError) as exc:
             note["result"] = str(exc).splitlines()[0][:160]

@@ -135,6 +135,7 @@ class Orbit:
 def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                        tol: float = ORBIT_TOL, max_iter: int = 40, trust: float = 1.0,
                        chord: bool = True, exact_monodromy: bool = True,
+                       give_up_early: bool = False,
                        ) -> tuple[np.ndarray, np.ndarray, float, int]:
     """Solve P^k(x) = x by safeguarded Newton's method.
 
@@ -166,6 +167,15 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
         approximate one there (:meth:`StroboscopicMap.approximate_monodromy`, about
         half the cost; multipliers to about its rtol), for a caller that needs only
         the orbit's stability.
+    give_up_early : bool
+        For a caller that only asks whether an orbit is near (the converged
+        classification): a chord step (a matrix of an earlier iterate) that does not
+        decrease the residual is not searched along but retried at once with a fresh
+        matrix, and a line search along a fresh matrix's step that finds no decrease
+        down to a step of 1e-3 raises :class:`OrbitNotFound` (near a torus or a chaotic
+        set there is no fixed point for Newton to descend to; without this option such
+        an attempt spends its ``max_iter`` iterations at about ten runs of k periods
+        each). Default False: every iteration searches its step, as before.
 
     Returns
     -------
@@ -186,6 +196,7 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
             xk, m, fresh = smap.advance(x, k), None, False
         else:
             (xk, m), fresh = smap.monodromy(x, k), True
+        m_here = m is not None  # m was evaluated at the current x
         for it in range(max_iter + 1):
             f = xk - x
             res = float(np.max(np.abs(f))) / state_scale(x)
@@ -201,6 +212,7 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                 break
             if m is None:
                 _, m = smap.approximate_monodromy(x, k)
+                m_here = True
             try:
                 dx = np.linalg.solve(m - eye, -f)
             except np.linalg.LinAlgError:
@@ -211,6 +223,7 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
             if size > radius:
                 dx *= radius / size
             norm0 = float(np.max(np.abs(f)))
+            stale = not m_here  # a chord step: the matrix of an earlier iterate
             alpha = 1.0
             while True:
                 x_try = x + alpha * dx
@@ -219,16 +232,23 @@ def newton_fixed_point(smap: StroboscopicMap, x0: np.ndarray, k: int = 1, *,
                     norm = float(np.max(np.abs(xk_try - x_try)))
                 except SimulationError:
                     norm = np.inf
-                if norm < (1.0 - 0.25 * alpha) * norm0 or alpha < 1e-3:
+                descent = norm < (1.0 - 0.25 * alpha) * norm0
+                if descent or alpha < 1e-3 or (give_up_early and stale):
                     break
                 alpha *= 0.5
+            if give_up_early and not descent:
+                if not stale:
+                    raise OrbitNotFound(f"period-{k} orbit: no descent along Newton's step at "
+                                        f"iteration {it} (relative residual {res:.2e})")
+                m = None  # retry from x with a fresh matrix
+                continue
             if not np.isfinite(norm):
                 raise OrbitNotFound(f"period-{k} orbit: the integration failed along the "
                                     f"Newton step at iteration {it}")
-            x, xk, fresh = x_try, xk_try, False
+            x, xk, fresh, m_here = x_try, xk_try, False, False
             if not chord:
                 xk, m = smap.monodromy(x, k)
-                fresh = True
+                fresh = m_here = True
             elif norm > 0.5 * norm0:
                 m = None  # slow: an approximate matrix at the new iterate
     except OrbitNotFound:
