@@ -15,8 +15,9 @@ confidences of ``docs/classification.md``), doing less work per point:
    ``NEWTON_TRY`` (a loose 1e-2: the orbit is near, not reached), or rule 3
    holds, Newton's method (:func:`chaospound.orbits.shooting.newton_fixed_point`,
    the classification's rtol, the variational monodromy, giving up at the first
-   step that does not descend) solves P^P(x) = x from the last section. A converged orbit whose Floquet multipliers (the
-   monodromy at rtol 1e-6: its stability, not its digits, is asked) are all
+   step that does not descend) solves P^P(x) = x from the last section. A
+   converged orbit whose Floquet multipliers (the monodromy at rtol 1e-6: its
+   stability, not its digits, is asked) are all
    inside the unit circle is the attractor: a record of max(3P, 8) cycles from
    the orbit's state is classified by
    :func:`~chaospound.dynamics.classify.classify_sequence` at tol (its
