@@ -185,6 +185,18 @@ class Simulation:
         }
 
 
+def run_stats(run) -> RunStats:
+    """The :class:`RunStats` of an :class:`~chaospound.dynamics.system.Evolution`."""
+    stats = run.stats
+    return RunStats(
+        steps=int(stats[kin.ST_ACCEPTED]),
+        rejected=int(stats[kin.ST_REJECTED]),
+        rhs_evals=int(stats[kin.ST_RHS_EVALS]),
+        events=int(stats[kin.ST_EVENTS]),
+        wall_s=run.wall_s,
+    )
+
+
 def simulate(
     scene: Scene | System,
     *,
@@ -277,14 +289,7 @@ def simulate(
     trajectory = None
     if run.samples is not None:
         trajectory = Trajectory(time=run.samples[:, 0].copy(), state=run.samples[:, 1:].copy())
-    stats = run.stats
-    stats_obj = RunStats(
-        steps=int(stats[kin.ST_ACCEPTED]),
-        rejected=int(stats[kin.ST_REJECTED]),
-        rhs_evals=int(stats[kin.ST_RHS_EVALS]),
-        events=int(stats[kin.ST_EVENTS]),
-        wall_s=run.wall_s,
-    )
+    stats_obj = run_stats(run)
     return Simulation(
         scene=_scene_as_run(system),
         model=system.model_name,

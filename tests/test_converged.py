@@ -28,6 +28,8 @@ from chaospound.dynamics.classify import (
 )
 from chaospound.dynamics.converged import (
     EXPONENT_RTOL,
+    MIN_WINDOW,
+    ZERO_ONE_CYCLES,
     _exponent_system,
     _mean_and_error,
     classify_converged,
@@ -158,6 +160,38 @@ def test_a_torus_whose_block_exponents_drift_together_is_not_chaotic():
     assert regime.regime == "quasi-periodic"
     assert abs(regime.max_exponent) < 3 * regime.max_exponent_error
     assert classify(point).regime == "quasi-periodic"
+
+
+def test_the_zero_one_record_keeps_its_sections_and_the_last_impacts():
+    """A label read by the 0-1 test (the torus at T/T_Ax 1.0539) stores the record's
+    1001 sections and the impacts of its last ``record`` cycles only, on the record's
+    own clock: each impact lies in the cycle it is counted in, between that cycle's
+    sections, at the phase the impact's time gives."""
+    result = classify_converged(FIG4.with_params(period_ratio=1.0539))
+    record, regime = result.record, result.regime
+    assert regime.evidence["decided_by"] == "exponent and 0-1 test"
+    assert record.strobe.state.shape[0] == ZERO_ONE_CYCLES + 1 == record.record + 1
+    np.testing.assert_array_equal(record.strobe.cycle, np.arange(ZERO_ONE_CYCLES + 1))
+    np.testing.assert_array_equal(result.final_state, record.strobe.state[-1])
+    imp = record.impacts
+    window = MIN_WINDOW
+    assert len(imp) > 0 and imp.cycle.min() >= ZERO_ONE_CYCLES - window
+    start = record.strobe.time[imp.cycle]
+    assert np.all((start <= imp.time) & (imp.time < start + record.period))
+
+
+def test_a_zero_one_record_that_repeats_keeps_all_its_impacts():
+    """Where the sections repeat within tol (rule 4 then reads the impacts of the
+    whole window), the 0-1 record is recorded with every impact: on fig3a's 3-1 orbit,
+    three a cycle over all 1000 cycles."""
+    from chaospound.dynamics.converged import _Classifier
+
+    point = load_preset("fig3a")
+    orbit = classify_converged(point)
+    classifier = _Classifier(point, 16, 2000, None, True)
+    record = classifier._zero_one_record(orbit.final_state)
+    assert len(record.impacts) == 3 * ZERO_ONE_CYCLES
+    assert record.impacts.cycle.min() == 0 and record.impacts.cycle.max() == ZERO_ONE_CYCLES - 1
 
 
 def test_wall_branches_none_and_periodic_1_1_coexist():

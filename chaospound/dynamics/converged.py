@@ -51,10 +51,12 @@ confidences of ``docs/classification.md``), doing less work per point:
    contracts, a period is near: back to step 2 from the current state.
 5. 0-1 test, only where the exponent cannot decide (|lambda| / sigma <= 3
    at the cap): ``ZERO_ONE_CYCLES`` sections are recorded, at ``EXPONENT_RTOL``
-   too; if their tail has settled to a period (rule 3 at tol: a long
-   transient ended), or comes within ``NEWTON_TRY`` of one that Newton has
-   not yet been tried at twice (a weakly stable orbit, blurred by the looser
-   runs), the search goes back to step 3, else
+   too, with the impacts of their last ``record`` cycles only (rule 6 reads the
+   sections; the impacts of all of them where the sections repeat within tol
+   or those cycles have none: :meth:`_Classifier._zero_one_record`); if their
+   tail has settled to a period (rule 3 at tol: a long transient ended), or
+   comes within ``NEWTON_TRY`` of one that Newton has not yet been tried at
+   twice (a weakly stable orbit, blurred by the looser runs), the search goes back to step 3, else
    :func:`classify_sequence` applies classify's rule 6 (period, then lambda
    against 3 sigma and K). Where rule 6 cannot name the point, the exponent
    goes on from the record's end, up to ``LONGER_RUN`` times ``EXPONENT_CAP``
@@ -74,7 +76,7 @@ and transients in excitation cycles.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import astuple, dataclass, replace
 
 import numpy as np
 
@@ -462,10 +464,8 @@ class _Classifier:
         return self._result(regime, record, confidence=confidence, window=self.record)
 
     def _zero_one(self, state, lam, err, blocks: list[float]) -> ConvergedResult | None:
-        from ..simulate import simulate
 
-        record = simulate(self.flow, transient=0, record=ZERO_ONE_CYCLES,
-                          initial_state=state, start_at_section=True)
+        record = self._zero_one_record(state)
         tail = record.strobe.state[-_tail_length(self.max_period):] * self.weights
         settled = _converged_period(tail, self.max_period, self.tol)
         if settled is None and self.newton:
@@ -497,6 +497,38 @@ class _Classifier:
                 + " do not agree on a regime")
         return self._result(regime, record, confidence=regime.confidence,
                             window=ZERO_ONE_CYCLES)
+
+    def _zero_one_record(self, state):
+        """``ZERO_ONE_CYCLES`` sections from ``state``, with the impacts of the last
+        ``record`` cycles only (locating every impact and its peak is about 30 % of such
+        a run, and rule 6 reads only the sections). The impacts of the whole window
+        where the label may need them: none in those cycles (rule 5 would read
+        ``none``), or a period within tol over the sections (rule 4's group check
+        reads the impacts of the whole window)."""
+        from ..simulate import RunStats, Strobe, run_stats, simulate
+
+        window = min(max(self.record, 2), ZERO_ONE_CYCLES)
+        offset = ZERO_ONE_CYCLES - window
+        head = evolve(self.flow, state, cycles=offset, start_at_section=True)
+        record = simulate(self.flow, transient=0, record=window, initial_state=head.state,
+                          start_at_section=True)
+        states = np.concatenate([head.sections, record.strobe.state[1:]])
+        scaled = states * self.weights
+        scale = _scale(scaled)
+        periods = range(1, min(self.max_period, (len(states) - 1) // 2) + 1)
+        if len(record.impacts) == 0 or any(_mismatch(scaled, p, scale) < self.tol
+                                           for p in periods):
+            return simulate(self.flow, transient=0, record=ZERO_ONE_CYCLES,
+                            initial_state=state, start_at_section=True)
+        period = self.flow.period
+        imp = record.impacts
+        impacts = replace(imp, time=imp.time + offset * period, cycle=imp.cycle + offset)
+        k = np.arange(ZERO_ONE_CYCLES + 1)
+        strobe = Strobe(cycle=k, time=head.section_times[0] + k * period, state=states)
+        stats = RunStats(*(a + b for a, b in zip(astuple(run_stats(head)),
+                                                 astuple(record.stats), strict=True)))
+        return replace(record, impacts=impacts, strobe=strobe, stats=stats,
+                       record=ZERO_ONE_CYCLES)
 
     def _read_record(self, record, lam: float, err: float) -> Regime:
         """Rule 6 on a record of sections and impacts, with the exponent and the 0-1 test."""
