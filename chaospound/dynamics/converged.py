@@ -56,7 +56,8 @@ confidences of ``docs/classification.md``), doing less work per point:
    or those cycles have none: :meth:`_Classifier._zero_one_record`); if their
    tail has settled to a period (rule 3 at tol: a long transient ended), or
    comes within ``NEWTON_TRY`` of one that Newton has not yet been tried at
-   twice (a weakly stable orbit, blurred by the looser runs), the search goes back to step 3, else
+   twice (a weakly stable orbit, blurred by the looser runs), the search goes
+   back to step 3, else
    :func:`classify_sequence` applies classify's rule 6 (period, then lambda
    against 3 sigma and K). Where rule 6 cannot name the point, the exponent
    goes on from the record's end, up to ``LONGER_RUN`` times ``EXPONENT_CAP``
@@ -464,7 +465,6 @@ class _Classifier:
         return self._result(regime, record, confidence=confidence, window=self.record)
 
     def _zero_one(self, state, lam, err, blocks: list[float]) -> ConvergedResult | None:
-
         record = self._zero_one_record(state)
         tail = record.strobe.state[-_tail_length(self.max_period):] * self.weights
         settled = _converged_period(tail, self.max_period, self.tol)
