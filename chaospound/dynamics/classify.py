@@ -658,8 +658,8 @@ def mean_square_displacement(z: np.ndarray, n_cut: int) -> np.ndarray:
     sum_{j < N - n} |z(j)|^2 - 2 Re sum_j z(j + n) conj(z(j))``: two prefix sums
     and the autocorrelation, by FFT (zero-padded to at least N + n_cut, so not
     circular at the lags asked for): O(N log N) per row instead of the direct
-    O(N n_cut), 20 times faster at N = 1000, n_cut = 100, to about 1e-13 of M (the subtraction loses
-    a few digits where |z| is large beside the displacements:
+    O(N n_cut), 20 times faster at N = 1000, n_cut = 100, to about 1e-13 of M
+    (the subtraction loses a few digits where |z| is large beside the displacements:
     tests/test_classify.py checks it against the direct sum).
 
     Parameters

@@ -427,13 +427,13 @@ class _Classifier:
                 z = lam / max(err, 1e-300)
             if watch:
                 self.sections.append(run.sections[1:, :n])
-            if watch and blocks[-1] < 0.0:  # the block contracted: a stable orbit near?
-                tried = sum(self.attempts.values())
-                found = self._try_period()
-                if found is not None:
-                    return augmented, lam, err, z, found
-                if sum(self.attempts.values()) > tried:
-                    self.sections = [self.sections[-1][-1:]]
+                if blocks[-1] < 0.0:  # the block contracted: a stable orbit near?
+                    tried = sum(self.attempts.values())
+                    found = self._try_period()
+                    if found is not None:
+                        return augmented, lam, err, z, found
+                    if sum(self.attempts.values()) > tried:
+                        self.sections = [self.sections[-1][-1:]]
             if abs(z) > Z_EARLY:
                 break
         return augmented, lam, err, z, None
@@ -514,10 +514,8 @@ class _Classifier:
                           start_at_section=True)
         states = np.concatenate([head.sections, record.strobe.state[1:]])
         scaled = states * self.weights
-        scale = _scale(scaled)
-        periods = range(1, min(self.max_period, (len(states) - 1) // 2) + 1)
-        if len(record.impacts) == 0 or any(_mismatch(scaled, p, scale) < self.tol
-                                           for p in periods):
+        if (len(record.impacts) == 0
+                or _best_mismatch(scaled, _scale(scaled), self.max_period) < self.tol):
             return simulate(self.flow, transient=0, record=ZERO_ONE_CYCLES,
                             initial_state=state, start_at_section=True)
         period = self.flow.period
@@ -619,9 +617,10 @@ def _mean_and_error(blocks: list[float]) -> tuple[float, float]:
     return mean, error
 
 
-def _best_mismatch(states: np.ndarray, scale: float) -> float:
-    """The smallest mismatch of a period that fits the record twice."""
-    periods = range(1, max(1, (states.shape[0] - 1) // 2) + 1)
+def _best_mismatch(states: np.ndarray, scale: float, max_period: int | None = None) -> float:
+    """The smallest mismatch of a period (up to ``max_period``) that fits the record twice."""
+    longest = max(1, (states.shape[0] - 1) // 2)
+    periods = range(1, longest + 1 if max_period is None else min(longest, max_period) + 1)
     return min(_mismatch(states, p, scale) for p in periods)
 
 
