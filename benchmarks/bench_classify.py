@@ -4,11 +4,13 @@ the other sweep modes.
 Two parts:
 
 ``speed``: points/s of ``--classify converged``, ``full`` and ``paper`` on the
-same slice of the fig4 scan (T/T_Ax 0.6-1.3, the resonance band, ``--points``
-points), one worker, the modes interleaved in ``--rounds`` rounds so that the
-machine's load hits them alike; the ratios are the result. ``--workers2``
-also times the converged slice with 2 workers against 1 (interleaved).
-Writes results/bench_classify.json.
+same slice of the fig4 scan (``--slice``, default T/T_Ax 0.6:1.3, the resonance
+band, ``--points`` points), one worker, the modes interleaved in ``--rounds``
+rounds so that the machine's load hits them alike; the ratios are the result.
+``--workers2`` also times the converged slice with 2 workers against 1
+(interleaved). Writes results/bench_classify.json, or ``--output``. The whole
+1000-point scan of the README tour is ``--slice 0.3:2.0 --points 1000``
+(results/bench_classify_scan.json).
 
 ``agreement``: a random sample of points from the fig4 scan (1000 points over
 T/T_Ax 0.3-2.0), the fig4-translational scan (same grid) and a (T/T_Ax, gap)
@@ -36,6 +38,8 @@ defaults) at the T/T_Ax of docs/classification.md's "Measured" table, fig4 and
 fig4-translational; prints the table's rows.
 
 Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds 3
+     PYTHONPATH=. python benchmarks/bench_classify.py speed --slice 0.3:2.0 --points 1000 \
+         --rounds 2 --output results/bench_classify_scan.json
      PYTHONPATH=. python benchmarks/bench_classify.py agreement --per-set 67
      PYTHONPATH=. python benchmarks/bench_classify.py birkhoff
      PYTHONPATH=. python benchmarks/bench_classify.py table
@@ -62,9 +66,9 @@ RESULTS = Path(__file__).resolve().parent.parent / "results"
 MODES = ("converged", "full", "paper")
 
 
-def speed(points: int, rounds: int, workers2: bool) -> dict:
+def speed(points: int, rounds: int, workers2: bool, interval: str = "0.6:1.3") -> dict:
     scene = load_preset("fig4")
-    axis = parse_axis(f"period_ratio=0.6:1.3#{points}")
+    axis = parse_axis(f"period_ratio={interval}#{points}")
     times: dict[str, list[float]] = {m: [] for m in MODES}
     if workers2:
         times["converged-2-workers"] = []
@@ -89,7 +93,7 @@ def speed(points: int, rounds: int, workers2: bool) -> dict:
     ratio_paper = [c / p for c, p in zip(rate["converged"], rate["paper"], strict=True)]
     out = {
         "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
-        "slice": f"fig4 period_ratio=0.6:1.3#{points}",
+        "slice": f"fig4 period_ratio={interval}#{points}",
         "rounds": rounds,
         "points_per_s": rate,
         "median_points_per_s": {m: float(np.median(v)) for m, v in rate.items()},
@@ -276,6 +280,8 @@ def main() -> None:
     sp.add_argument("--points", type=int, default=50)
     sp.add_argument("--rounds", type=int, default=3)
     sp.add_argument("--workers2", action="store_true")
+    sp.add_argument("--slice", default="0.6:1.3", help="T/T_Ax interval LO:HI")
+    sp.add_argument("--output", type=Path, default=RESULTS / "bench_classify.json")
     ag = sub.add_parser("agreement")
     ag.add_argument("--per-set", type=int, default=67)
     ag.add_argument("--seed", type=int, default=17)
@@ -286,8 +292,8 @@ def main() -> None:
     args = parser.parse_args()
     RESULTS.mkdir(exist_ok=True)
     if args.part == "speed":
-        out = speed(args.points, args.rounds, args.workers2)
-        (RESULTS / "bench_classify.json").write_text(json.dumps(out, indent=1) + "\n")
+        out = speed(args.points, args.rounds, args.workers2, args.slice)
+        args.output.write_text(json.dumps(out, indent=1) + "\n")
     elif args.part == "table":
         out = table()
     elif args.part == "birkhoff":
