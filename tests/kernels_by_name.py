@@ -41,11 +41,18 @@ _METHODS = ("dopri5", "cash-karp", "rk4", "dop853")
 def kernels(model: int, p: np.ndarray, method: int = 0):
     """The composed module of a model id (``TANGENT + id`` for tangent), a method id
     and the ground motion of ``p``."""
-    tangent = model >= TANGENT
-    base = model - TANGENT if tangent else model
-    ground = "sine" if p[P_GROUND] == 1.0 else "none"
-    return engine_for(Composition(_MODELS[base], ground=ground, method=_METHODS[method],
-                                  tangent="qr" if tangent else "none")).module
+    key = (model, bool(p[P_GROUND] == 1.0), method)
+    module = _MODULES.get(key)
+    if module is None:  # tests call kernels per sample: build the Composition once
+        tangent = model >= TANGENT
+        base = model - TANGENT if tangent else model
+        module = _MODULES[key] = engine_for(Composition(
+            _MODELS[base], ground="sine" if key[1] else "none", method=_METHODS[method],
+            tangent="qr" if tangent else "none")).module
+    return module
+
+
+_MODULES: dict[tuple, object] = {}
 
 
 # ------------------------------------------------------------------ models
