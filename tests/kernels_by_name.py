@@ -12,6 +12,7 @@ old kernels did.
 
 from __future__ import annotations
 
+import functools
 from types import SimpleNamespace
 
 import numpy as np
@@ -41,18 +42,16 @@ _METHODS = ("dopri5", "cash-karp", "rk4", "dop853")
 def kernels(model: int, p: np.ndarray, method: int = 0):
     """The composed module of a model id (``TANGENT + id`` for tangent), a method id
     and the ground motion of ``p``."""
-    key = (model, bool(p[P_GROUND] == 1.0), method)
-    module = _MODULES.get(key)
-    if module is None:  # tests call kernels per sample: build the Composition once
-        tangent = model >= TANGENT
-        base = model - TANGENT if tangent else model
-        module = _MODULES[key] = engine_for(Composition(
-            _MODELS[base], ground="sine" if key[1] else "none", method=_METHODS[method],
-            tangent="qr" if tangent else "none")).module
-    return module
+    return _module(model, bool(p[P_GROUND] == 1.0), method)
 
 
-_MODULES: dict[tuple, object] = {}
+@functools.cache  # tests call kernels per sample: build each Composition once
+def _module(model: int, sine: bool, method: int):
+    tangent = model >= TANGENT
+    base = model - TANGENT if tangent else model
+    return engine_for(Composition(_MODELS[base], ground="sine" if sine else "none",
+                                  method=_METHODS[method],
+                                  tangent="qr" if tangent else "none")).module
 
 
 # ------------------------------------------------------------------ models
