@@ -1,4 +1,4 @@
-"""The cold test suite of one tree against another's, on the same tests, in one run.
+"""The test suite of one tree against another's, on the same tests, in one run.
 
     python benchmarks/bench_suite.py --old /path/to/old/tree --new . [--rounds 2]
         [--output results/bench_suite.json]
@@ -9,8 +9,8 @@ comparison that means something is like for like: the new tree runs only the
 tests whose node ids the old tree collects (every old test still exists under its
 name), with its own pytest options (two xdist workers); the old tree runs its
 whole suite with its own options (serial, and without pytest-xdist, which its
-test dependencies did not include: ``-p no:xdist``). Both start from empty caches, as on a
-fresh clone: the numba cache files (``*.nbi``, ``*.nbc``) under each tree are
+test dependencies did not include: :data:`OLD_OPTIONS`). Both start from empty
+caches, as on a fresh clone: the numba cache files (``*.nbi``, ``*.nbc``) under each tree are
 deleted before its run, and ``CHAOSPOUND_CACHE_DIR`` is a fresh directory.
 (``NUMBA_CACHE_DIR`` stays unset: the old tree's cache tests assume ``__pycache__``.)
 
@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 from bench_compile import commit
 
+OLD_OPTIONS = ["-p", "no:xdist"]  #: the old tree's pytest: no xdist, as in its CI
 #: a pytest plugin that keeps the tests named in KEEP_IDS (one node id per line)
 KEEP_PLUGIN = """
 import os
@@ -102,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     # its children inherit that: both suites' Ctrl-C tests would then wait in vain
     signal.signal(signal.SIGINT, signal.default_int_handler)
     old, new = args.old.resolve(), args.new.resolve()
-    old_ids = collect(old, ["-p", "no:xdist"])
+    old_ids = collect(old, OLD_OPTIONS)
     new_ids = set(collect(new, ["-n", "0"]))
     missing = [i for i in old_ids if i not in new_ids]
     if missing:
@@ -113,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
         ids = Path(plugin_dir, "ids.txt")
         ids.write_text("\n".join(old_ids) + "\n")
         runs = {
-            old: (["-p", "no:xdist"], dict(os.environ, PYTHONPATH=str(old))),
+            old: (OLD_OPTIONS, dict(os.environ, PYTHONPATH=str(old))),
             new: (["-p", "keep_ids"], dict(os.environ, PYTHONPATH=f"{new}{os.pathsep}"
                                            f"{plugin_dir}", KEEP_IDS=str(ids))),
         }
