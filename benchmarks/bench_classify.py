@@ -180,10 +180,10 @@ def _markdown(s: dict) -> str:
         "",
         f"Command: `PYTHONPATH=. {s['command']}`",
         "",
-        f"{s['agree']} of {s['points']} points agree ({100 * s['agreement']:.1f} %); "
+        f"{s['agree']} of {s['points']} points agree ({100 * s['agreement']:.2f} %); "
         f"unresolved: converged {s['converged_unresolved']}, careful "
         f"{s['careful_unresolved']}. Where the careful classifier names the point: "
-        f"{100 * s['agreement_where_careful_names']:.1f} %. The careful classifier ran "
+        f"{100 * s['agreement_where_careful_names']:.2f} %. The careful classifier ran "
         f"up to {s['careful_max_transient']} transient cycles and "
         f"{s['careful_exponent_cycles']} exponent cycles.",
         "",
@@ -252,6 +252,9 @@ def _cell(regime) -> tuple[str, str]:
     if regime.max_exponent is not None and regime.period_cycles is None:
         k = "-" if regime.zero_one is None else f"{regime.zero_one:.2f}"
         evidence = f"{regime.max_exponent:.3f} +- {regime.max_exponent_error:.3f}, K {k}"
+        banded = regime.evidence.get("zero_one_banded")
+        if banded is not None:
+            evidence += f" ({banded:.2f} in {regime.evidence['zero_one_bands']} bands)"
     else:
         evidence = f"{regime.strobe_mismatch:.1e}"
     return label, evidence

@@ -213,6 +213,55 @@ def test_zero_one_is_reproducible_and_accepts_explicit_c():
         zero_one_test(x[:10])
 
 
+def banded_logistic(n, r=3.575):
+    """The logistic map past the period-doubling cascade: chaos in four bands visited in
+    turn (largest exponent about +0.09 per step), 2000 steps of transient dropped."""
+    return logistic(2000 + n, r=r)[2000:]
+
+
+def test_zero_one_sees_chaos_in_bands():
+    """Banded chaos: the plain test's K is low (the band pattern's bounded oscillation
+    swamps the chaotic growth over 1000 values); less its band means, K is near 1."""
+    x = banded_logistic(1000)
+    steps = np.log(np.abs(3.575 * (1.0 - 2.0 * banded_logistic(20000))))
+    assert 0.05 < steps.mean() < 0.15  # chaotic: a positive exponent
+    assert zero_one_test(x) < 0.2
+    assert zero_one_test(x, bands=4) > 0.8
+    assert zero_one_test(x, bands=8) > 0.8
+
+
+def test_removing_bands_keeps_regular_signals_regular():
+    k = np.arange(1000)
+    torus = np.cos(2 * np.pi * GOLDEN * k)
+    for bands in (2, 3, 4, 8):
+        assert zero_one_test(np.where(k % 2 == 0, 1.0, -1.0) + 0.3 * torus, bands=bands) < 0.2
+        assert zero_one_test(np.tile([0.1, 0.7, 0.4], 334)[:1000], bands=bands) < 0.2
+        assert zero_one_test(torus, bands=bands) < 0.2
+    with pytest.raises(ValueError, match="bands = 0"):
+        zero_one_test(torus, bands=0)
+    with pytest.raises(ValueError, match="bands = 101"):
+        zero_one_test(torus, bands=101)
+
+
+def test_banded_chaos_with_a_positive_exponent_is_chaotic():
+    """Rule 6 picks the bands (the period <= 8 of least mismatch) itself: the plain 0-1
+    test no longer vetoes the exponent of banded chaos, and a banded torus stays
+    quasi-periodic."""
+    x = banded_logistic(1001)
+    regime = classify_sequence(x, *one_impact_per_cycle(x[:-1]), exponent=0.09,
+                               exponent_error=0.005)
+    assert regime.regime == "chaotic"
+    assert regime.evidence["zero_one_bands"] in (4, 8)
+    assert regime.zero_one < 0.2 < 0.8 < regime.evidence["zero_one_banded"]
+    k = np.arange(1001)
+    torus = np.where(k % 2 == 0, 1.0, -1.0) + 0.3 * np.cos(2 * np.pi * GOLDEN * k)
+    regime = classify_sequence(torus, *one_impact_per_cycle(torus[:-1]), exponent=0.0001,
+                               exponent_error=0.001)
+    assert regime.regime == "quasi-periodic"
+    assert regime.evidence["zero_one_bands"] > 1
+    assert max(regime.zero_one, regime.evidence["zero_one_banded"]) < 0.2
+
+
 def test_rule_3_at_once_is_rule_3_period_by_period():
     """The convergence test of every period at once (one table of section distances)
     picks the period the definition does, P by P: the smallest P whose last
