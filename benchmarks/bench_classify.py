@@ -12,6 +12,13 @@ rounds so that the machine's load hits them alike; the ratios are the result.
 1000-point scan of the README tour is ``--slice 0.3:2.0 --points 1000``
 (results/bench_classify_scan.json).
 
+``baseline``: the default sweep of this tree against ``--classify full`` of an older
+tree (``--old``, a worktree; issue 17's baseline is da32171, the code of the day the
+issue was written), both as ``chaospound sweep`` processes with one worker on the same
+slice, interleaved in ``--rounds`` rounds, timed whole-process (start-up included)
+after one untimed 2-point run of each that fills its kernel caches. Writes
+results/bench_classify_baseline.json, or ``--output``.
+
 ``agreement``: a random sample of points from the fig4 scan (1000 points over
 T/T_Ax 0.3-2.0), the fig4-translational scan (same grid) and a (T/T_Ax, gap)
 map of fig4 (T/T_Ax 0.3-2.0 x gap 0.5-2.0, 200 x 200); each point is
@@ -40,6 +47,8 @@ fig4-translational; prints the table's rows.
 Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds 3
      PYTHONPATH=. python benchmarks/bench_classify.py speed --slice 0.3:2.0 --points 1000 \
          --rounds 2 --output results/bench_classify_scan.json
+     PYTHONPATH=. python benchmarks/bench_classify.py baseline --old <worktree> \
+         --slice 0.3:2.0 --points 1000 --rounds 2
      PYTHONPATH=. python benchmarks/bench_classify.py agreement --per-set 67
      PYTHONPATH=. python benchmarks/bench_classify.py birkhoff
      PYTHONPATH=. python benchmarks/bench_classify.py table
@@ -50,6 +59,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -108,6 +118,54 @@ def speed(points: int, rounds: int, workers2: bool, interval: str = "0.6:1.3") -
         out["two_workers_over_one"] = r2
         out["median_two_workers_over_one"] = float(np.median(r2))
     return out
+
+
+def _sweep_process(tree: Path, spec: list[str], output: str) -> tuple[float, str]:
+    """Run ``chaospound sweep`` of ``tree`` (one worker) in a process: (wall s, its summary)."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    command = [sys.executable, "-m", "chaospound", "sweep", "--preset", "fig4", *spec,
+               "-o", output, "--workers", "1", "--quiet"]
+    t0 = time.perf_counter()
+    done = subprocess.run(command, cwd=tree, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(command)} (in {tree}) failed:\n{done.stderr[-2000:]}")
+    summary = [line for line in done.stdout.splitlines() if line.startswith("regimes")]
+    return wall, summary[-1] if summary else done.stdout.strip()[-300:]
+
+
+def baseline(old: Path, points: int, rounds: int, interval: str) -> dict:
+    from bench_compile import commit
+
+    new = Path(__file__).resolve().parent.parent
+    grid = ["--param", f"period_ratio={interval}#{points}"]
+    runs = {"new converged": (new, []), "old full": (old, ["--classify", "full"])}
+    walls: dict[str, list[float]] = {name: [] for name in runs}
+    summaries: dict[str, str] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, (tree, mode) in runs.items():  # fill the kernel caches, untimed
+            _sweep_process(tree, ["--param", "period_ratio=0.7:0.9#2", *mode],
+                           os.path.join(tmp, f"warm-{name.split()[0]}.h5"))
+        for r in range(rounds):
+            order = list(runs) if r % 2 == 0 else list(runs)[::-1]
+            for name in order:
+                tree, mode = runs[name]
+                wall, summaries[name] = _sweep_process(
+                    tree, [*grid, *mode], os.path.join(tmp, f"{name.split()[0]}-{r}.h5"))
+                walls[name].append(wall)
+                print(f"round {r}: {name}: {wall:.1f} s, {points / wall:.2f} points/s; "
+                      f"{summaries[name]}", flush=True)
+    ratios = [o / n for o, n in zip(walls["old full"], walls["new converged"], strict=True)]
+    return {
+        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+        "old": commit(old), "new": commit(new),
+        "slice": f"fig4 period_ratio={interval}#{points}", "rounds": rounds,
+        "wall_s": walls,
+        "points_per_s": {k: [points / w for w in v] for k, v in walls.items()},
+        "new_converged_over_old_full": ratios,
+        "median_new_converged_over_old_full": float(np.median(ratios)),
+        "regimes_last_round": summaries,
+    }
 
 
 def _sample_sets(per_set: int, seed: int):
@@ -285,6 +343,12 @@ def main() -> None:
     sp.add_argument("--workers2", action="store_true")
     sp.add_argument("--slice", default="0.6:1.3", help="T/T_Ax interval LO:HI")
     sp.add_argument("--output", type=Path, default=RESULTS / "bench_classify.json")
+    bl = sub.add_parser("baseline")
+    bl.add_argument("--old", type=Path, required=True, help="the older tree (a worktree)")
+    bl.add_argument("--points", type=int, default=50)
+    bl.add_argument("--rounds", type=int, default=2)
+    bl.add_argument("--slice", default="0.6:1.3", help="T/T_Ax interval LO:HI")
+    bl.add_argument("--output", type=Path, default=RESULTS / "bench_classify_baseline.json")
     ag = sub.add_parser("agreement")
     ag.add_argument("--per-set", type=int, default=67)
     ag.add_argument("--seed", type=int, default=17)
@@ -296,6 +360,9 @@ def main() -> None:
     RESULTS.mkdir(exist_ok=True)
     if args.part == "speed":
         out = speed(args.points, args.rounds, args.workers2, args.slice)
+        args.output.write_text(json.dumps(out, indent=1) + "\n")
+    elif args.part == "baseline":
+        out = baseline(args.old.resolve(), args.points, args.rounds, args.slice)
         args.output.write_text(json.dumps(out, indent=1) + "\n")
     elif args.part == "table":
         out = table()

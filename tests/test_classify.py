@@ -405,6 +405,20 @@ def test_fig4_at_0_9_is_chaotic():
     assert f"{regime.evidence['birkhoff_digits']:.1f} digits (regular at >= 5)" in row
 
 
+def test_cli_report_shows_the_band_corrected_k():
+    """The report's 0-1 row gives the band-corrected K beside the plain one (rule 6)."""
+    from chaospound.cli.classify import _classify_report
+
+    evidence = {"tol": 1e-5, "best_period": 2, "rtol": 1e-8, "atol": 1e-10, "model": "towers",
+                "window_cycles": 64, "zero_one_bands": 2, "zero_one_banded": 0.997}
+    regime = Regime("chaotic", strobe_mismatch=0.13, max_exponent=0.035,
+                    max_exponent_error=0.003, zero_one=0.093, confidence=0.9,
+                    evidence=evidence)
+    [row] = [line for line in _classify_report(load_preset("fig4"), regime, None).splitlines()
+             if "0-1 test K" in line]
+    assert "0.093; 0.997 less the means of 2 bands" in row
+
+
 @pytest.mark.parametrize(("period_ratio", "label"), [(0.7, "periodic 1-1"), (1.3, "periodic 1-2")])
 def test_translational_pounding_is_not_group_periodic(period_ratio, label):
     """The pair model (no torsion): periodic face impacts, not groups (the paper, 3.2)."""

@@ -169,6 +169,9 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
             " per cycle"
         )
     zero_one = "-" if regime.zero_one is None else f"{regime.zero_one:.3f}"
+    if evidence.get("zero_one_banded") is not None:  # rule 6: banded chaos
+        zero_one += (f"; {evidence['zero_one_banded']:.3f} less the means of "
+                     f"{evidence['zero_one_bands']} bands")
     digits = evidence.get("birkhoff_digits")  # rule 6's other test of regularity
     birkhoff = [] if digits is None else [
         ("Birkhoff average", f"{digits:.1f} digits (regular at >= 5)")]
