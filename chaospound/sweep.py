@@ -80,6 +80,7 @@ COMMIT_INTERVAL = 1.0
 #: at most about a second of work
 COMMIT_POINTS = 256
 POLL_S = 0.2  #: the longest wait for worker processes before looking at Ctrl-C
+MANAGER_JOIN_S = 5.0  #: the longest wait for a broken pool's manager thread after an abort
 
 
 class SweepInterrupted(Exception):
@@ -767,6 +768,13 @@ class _LocalBackend:
             for proc in list(getattr(self._pool, "_processes", {}).values()):
                 proc.terminate()
             self._pool.shutdown(wait=False, cancel_futures=True)
+            # let its manager thread see the dead workers and close its wake-up pipe now:
+            # before CPython 3.12.8 / 3.13.1 (gh-125451) the interpreter's exit hook could
+            # write to that pipe while the thread closed it, and print a traceback after
+            # the sweep's one-line error (seen once in tests/test_store_crash.py's full disk)
+            manager = getattr(self._pool, "_executor_manager_thread", None)
+            if manager is not None:
+                manager.join(timeout=MANAGER_JOIN_S)
             self._pool = None
 
     def close(self) -> None:
