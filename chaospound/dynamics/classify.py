@@ -917,8 +917,7 @@ def _aperiodic_regime(exponent, error, zero_one, evidence) -> tuple[str, float]:
     their exponent stays within its error of 0 (docs/classification.md, rule 6)."""
     chaos_k = None if zero_one is None else max(
         zero_one, evidence.get("zero_one_banded", zero_one))
-    k_chaos = None if chaos_k is None else _clip(
-        (chaos_k - ZERO_ONE_REGULAR) / (ZERO_ONE_CHAOTIC - ZERO_ONE_REGULAR))
+    k_chaos = None if chaos_k is None else _zero_one_chaos(chaos_k)
     k_regular = None if zero_one is None else _clip(
         (ZERO_ONE_REGULAR - zero_one) / ZERO_ONE_REGULAR)
     if exponent is not None and error is not None and math.isfinite(exponent):
@@ -939,11 +938,15 @@ def _aperiodic_regime(exponent, error, zero_one, evidence) -> tuple[str, float]:
     if zero_one is None:
         return "unresolved", 0.0
     if zero_one > ZERO_ONE_CHAOTIC:
-        return "chaotic", _clip((zero_one - ZERO_ONE_REGULAR)
-                                / (ZERO_ONE_CHAOTIC - ZERO_ONE_REGULAR))
+        return "chaotic", _zero_one_chaos(zero_one)
     if zero_one < ZERO_ONE_REGULAR:
         return "quasi-periodic", k_regular
     return "unresolved", 0.0
+
+
+def _zero_one_chaos(k: float) -> float:
+    """The 0-1 test's confidence in chaos: 0 at K = 0.2, 1 at K = 0.8."""
+    return _clip((k - ZERO_ONE_REGULAR) / (ZERO_ONE_CHAOTIC - ZERO_ONE_REGULAR))
 
 
 def _mismatch_confidence(mismatch: float, tol: float) -> float:
