@@ -211,6 +211,13 @@ class Composition:
         return Composition(self.model, self.law, self.ground, self.method, tangent, self.user,
                            self.ground_y)
 
+    def compiled(self) -> Composition:
+        """The composition whose engine module runs this one: "qr" and "propagator"
+        integrate the same tangent vectors and differ only in what the loop records
+        at a section (its ``propagate`` argument, like the other output choices), so
+        both run the "qr" module and a process compiles it once."""
+        return self.with_tangent("qr") if self.tangent == "propagator" else self
+
     def label(self) -> str:
         """Short human label: ``towers/hertz/sine/dopri5`` (``sine+y`` with ground_y)."""
         parts = [self.model, self.law, self.ground + ("+y" if self.ground_y else ""),
@@ -300,12 +307,6 @@ def _bindings(c: Composition) -> str:
         f"GROUND_PERIODIC = {c.ground in ('sine', 'none')}",
         f"GROUND_KINKS = {bool(importlib.import_module(ground).KINKS)}",
         f"TANGENT = {c.tangent != 'none'}",
-        "from chaospound.engine.bookkeeping import "
-        + ("store_propagator" if c.tangent == "propagator" else "orthonormalize")
-        + " as section_tangent",
-        "from chaospound.engine.bookkeeping import "
-        + ("store_propagator_memory" if c.tangent == "propagator" else "orthonormalize_memory")
-        + " as section_tangent_memory",
         f"ADAPTIVE = {method.adaptive}",
         f"NEW_EVALS = {method.new_evals}",
         f"DENSE_EVALS = {method.dense_evals}",
@@ -425,7 +426,9 @@ def _footer(c: Composition) -> str:
 
 
 def generate_source(c: Composition, cached: bool = True) -> str:
-    """The text of the engine module of ``c`` (``cached``: its kernels on numba's disk cache)."""
+    """The text of the engine module of ``c`` (``cached``: its kernels on numba's disk cache).
+    Compositions with the same :meth:`Composition.compiled` have the same text."""
+    c = c.compiled()
     modules = (MODELS[c.model],) + TEMPLATES
     parts = [_template_text(m) for m in modules]
     decorators = ("from chaospound.kernels.jit import callable_from_python, "
@@ -459,7 +462,7 @@ def composition_key(c: Composition) -> str:
     import numba
 
     text = "\0".join([TEMPLATE_VERSION, numba.__version__, sys.version, source_digest(),
-                      c.canonical()])
+                      c.compiled().canonical()])
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -497,6 +500,7 @@ class Engine:
         self.composition = composition
         self.module = module
         self.cached_file = cached_file
+        self.propagate = composition.tangent == "propagator"  #: the loop's record at sections
         self._loaded = False
 
     def __repr__(self) -> str:
@@ -510,7 +514,8 @@ class Engine:
         scalars = np.empty(N_SCALARS)
         ev_end = np.empty(MAX_EVENTS, dtype=np.int64)
         args = (p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n_samples,
-                strobe, traj, imp, imp_state, stats, tangent_log, vectors, scalars, ev_end)
+                strobe, traj, imp, imp_state, stats, tangent_log, self.propagate, vectors,
+                scalars, ev_end)
         if not self._loaded:
             self._load_loop(args)
         return self.module.run(*args)
@@ -558,6 +563,8 @@ def _machine_lock(path: Path | None):
 
 
 _ENGINES: dict[Composition, Engine] = {}
+#: modules built in memory, per compiled composition (those on file: ``sys.modules``)
+_IN_MEMORY: dict[Composition, types.ModuleType] = {}
 _LOCK = threading.Lock()
 
 
@@ -594,7 +601,15 @@ def _load(c: Composition) -> Engine:
 
 
 def _load_in_memory(c: Composition) -> types.ModuleType:
-    """The module built from text, uncached: user functions bound as objects."""
+    """The module built from text, uncached (user functions bound as objects), once per
+    process and compiled composition."""
+    module = _IN_MEMORY.get(c.compiled())
+    if module is None:
+        module = _IN_MEMORY[c.compiled()] = _build_in_memory(c)
+    return module
+
+
+def _build_in_memory(c: Composition) -> types.ModuleType:
     source = generate_source(c, cached=False)
     module = types.ModuleType(f"chaospound_engine_{uuid.uuid4().hex[:12]}")
     if c.user is not None:

@@ -28,7 +28,11 @@ from chaospound.engine.bookkeeping import (
     crossing_shift,
     landed_short,
     may_cross,
+    orthonormalize,
+    orthonormalize_memory,
     sort_events,
+    store_propagator,
+    store_propagator_memory,
     store_sample,
 )
 from chaospound.engine.events import EXTREMUM_TOL, FORCE_RATE, SWITCH
@@ -96,8 +100,6 @@ from chaospound.kernels.free import (
     rhs,
     rhs_vectors,
     saltation_tangent,
-    section_tangent,
-    section_tangent_memory,
     shift_tangent,
     step,
 )
@@ -118,7 +120,7 @@ KINK_SLACK = 1e-12
 
 @kernel
 def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n_samples, strobe,
-        traj, imp, imp_state, stats, tangent_log, vectors, scalars, ev_end):
+        traj, imp, imp_state, stats, tangent_log, propagate, vectors, scalars, ev_end):
     """Integrate from ``clock`` to the section ``k_end``, recording the window.
 
     Parameters
@@ -156,6 +158,10 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         the cycles of the record window, ``log R_ii`` of the cycle just ended is
         stored here; "propagator", shape (k_end - k_record, k n), the vectors of
         the cycle just ended are stored here and reset to the unit vectors.
+    propagate : bool
+        Tangent compositions only: record "propagator" (True) or "qr" (False)
+        at the sections. The two integrate the same tangent vectors and differ
+        only in this record, so they share one compiled engine.
     vectors, scalars, ev_end : ndarray
         Workspaces: (MAX_STAGES + MAX_DENSE + 5, n), (N_SCALARS,) and
         (MAX_EVENTS,) int64. Compiled without numba's reference-counting
@@ -251,11 +257,18 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                 model_ends(t0, y, p, ends_tmp)
                 shift_tangent(p, ends_tmp[0], True, y, n_base, n_vectors, work2)
             if n_vectors > 0 and attempts > 0:
+                log_row = k - 1 - k_record
                 if LAW_MEMORY:  # the vectors' memory sensitivities follow them
-                    section_tangent_memory(y, p, LAW_DXI, n_base, n_vectors, tangent_log,
-                                           k - 1 - k_record)
+                    if propagate:
+                        store_propagator_memory(y, p, LAW_DXI, n_base, n_vectors,
+                                                tangent_log, log_row)
+                    else:
+                        orthonormalize_memory(y, p, LAW_DXI, n_base, n_vectors, tangent_log,
+                                              log_row)
+                elif propagate:
+                    store_propagator(y, n_base, n_vectors, tangent_log, log_row)
                 else:
-                    section_tangent(y, n_base, n_vectors, tangent_log, k - 1 - k_record)
+                    orthonormalize(y, n_base, n_vectors, tangent_log, log_row)
                 rhs(t0, y, p, f0)
                 stats[ST_RHS_EVALS] += 1
             if k_record <= k <= k_end:

@@ -56,8 +56,7 @@ model_memory_linearize = model_memory_jvp = model_onset_variation = model_onset_
 # ---- user system
 user_rhs = user_jacobian = user_gap = _unbound
 # ---- method
-step = dense_prepare = controller = step_error = section_tangent = _unbound
-section_tangent_memory = _unbound
+step = dense_prepare = controller = step_error = _unbound
 # ---- defined by the engine templates, used by others
 rhs = rhs_grounded = end_value = locate_root = locate_extremum = _unbound
 onset_tangent = reset_tangent_memory = saltation_tangent = rhs_vectors = _unbound
