@@ -17,6 +17,7 @@ import time
 
 import numba
 import numpy as np
+import pytest
 
 from chaospound import load_preset, simulate
 from chaospound.dynamics.system import System
@@ -78,3 +79,35 @@ def test_the_compile_lock_excludes_other_processes(tmp_path):
     assert child.exitcode == 0
     with _machine_lock(None):  # no path: no lock, no error
         pass
+
+
+def test_qr_and_propagator_share_one_module_and_keep_their_records():
+    """The two tangent modes run one compiled module (the loop's ``propagate`` argument
+    chooses the record at a section), and a run of one leaves the other as it was: the
+    QR log after a propagator run equals the QR log before it, bit for bit, and the
+    propagators' product maps a tangent vector as the QR run's vector moves."""
+    from chaospound.dynamics.system import evolve
+
+    # tight tolerances: the two runs' step sequences differ (their tangent components
+    # differ and enter the error norm), so they agree to the integration error only
+    system = System.from_scene(load_preset("fig4")).with_solver(rtol=1e-11, atol=1e-13)
+    qr, propagator = system.engine("qr"), system.engine("propagator")
+    assert qr.module is propagator.module and qr is not propagator
+    assert (qr.propagate, propagator.propagate) == (False, True)
+    n = system.dim
+    state = evolve(system, cycles=20).state
+    augmented = np.zeros(2 * n)
+    augmented[:n] = state
+    augmented[n] = 1.0
+    before = evolve(system, augmented, cycles=6, tangent="qr")
+    stored = evolve(system, state, cycles=6, tangent="propagator")
+    after = evolve(system, augmented, cycles=6, tangent="qr")
+    assert before.tangent_log.tobytes() == after.tangent_log.tobytes()
+    assert before.augmented_state.tobytes() == after.augmented_state.tobytes()
+    # the same vector carried by the propagators: its growth is the sum of the QR logs
+    v = augmented[n:].copy()
+    for row in stored.tangent_log:
+        v = row.reshape(n, n).T @ v  # row i holds column i of the cycle's propagator
+    assert np.log(np.linalg.norm(v)) == pytest.approx(before.tangent_log.sum(), rel=1e-7)
+    np.testing.assert_allclose(v / np.linalg.norm(v), after.augmented_state[n:], rtol=1e-6,
+                               atol=1e-9)
