@@ -139,7 +139,8 @@ def make_axis(name: str, grid: str, scene: Scene | None = None) -> Axis:
         # the cutoff makes difflib skip long names after an O(1) length test
         close = difflib.get_close_matches(name, list(PARAMETERS) + list(SHORTHANDS), n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise ValueError(f"unknown sweep parameter {shorten(name, quote=True)}{hint}")
+        raise ValueError(f"unknown sweep parameter {shorten(name, quote=True)}{hint}; "
+                         "`chaospound params` lists them all")
     values = grid_values(name, grid)
     axis = Axis(name=name, values=values, spec=grid)
     if scene is not None:

@@ -97,6 +97,16 @@ def test_bad_scene_options_are_one_line_exit_2(capsys, options, names):
     assert_one_line_error(*run(capsys, "simulate", *options, "--json"), *names)
 
 
+def test_an_unknown_sweep_parameter_says_where_the_names_are(capsys, tmp_path):
+    code, out, err = run(capsys, "sweep", "--preset", "wall", "--param", "nope=0:1#3",
+                         "-o", str(tmp_path / "x.h5"))
+    assert_one_line_error(code, out, err, "nope", "chaospound params")
+    assert not (tmp_path / "x.h5").exists()
+    code, out, err = run(capsys, "sweep", "--preset", "wall", "--param", "gapp=1:2#3",
+                         "-o", str(tmp_path / "x.h5"))
+    assert_one_line_error(code, out, err, "gapp", "did you mean 'gap'")
+
+
 def test_malformed_toml_names_the_file(capsys, bad_toml):
     assert_one_line_error(*run(capsys, "simulate", str(bad_toml)), bad_toml.name, "TOML")
 
