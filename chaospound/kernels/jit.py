@@ -26,11 +26,6 @@ a kernel through a C function pointer, so it was compiled for nothing.
 A generated engine module binds ``kernel`` and ``inline`` to
 :data:`kernel_internal` and :data:`inline_internal` instead: the same code,
 compiled for other kernels only (:class:`InternalDispatcher`), except its loop.
-
-Importing this module also makes numba's comparison of compiler flags cheaper
-(:data:`_FAST_CONFIG`): the same values and hash, computed from a table of
-defaults, which saves 15-25 % of every engine's compile time and changes
-nothing numba compiles.
 """
 
 from collections.abc import Mapping
