@@ -111,37 +111,3 @@ def test_qr_and_propagator_share_one_module_and_keep_their_records():
     assert np.log(np.linalg.norm(v)) == pytest.approx(before.tangent_log.sum(), rel=1e-7)
     np.testing.assert_allclose(v / np.linalg.norm(v), after.augmented_state[n:], rtol=1e-6,
                                atol=1e-9)
-
-
-def test_numba_flags_compare_and_hash_as_numba_defines_them():
-    """kernels.jit computes numba's TargetConfig.values() and hash from a per-class table
-    of defaults (a compile-time saving): the same dict and number as numba's own
-    definitions, for fresh, set, copied and discarded options."""
-    from numba.core.compiler import Flags
-
-    from chaospound.kernels import jit
-
-    def numba_values(config):  # numba's definition (numba/core/targetconfig.py)
-        return {name: getattr(config, name) for name in config.options}
-
-    def numba_hash(config):
-        return hash(tuple(sorted(numba_values(config))))
-
-    assert jit._FAST_CONFIG
-    plain = Flags()
-    nrt_off = Flags()
-    nrt_off.nrt = False
-    nrt_off.error_model = "numpy"
-    copied = Flags(copy_from=nrt_off)
-    copied.forceinline = True
-    discarded = Flags(copy_from=copied)
-    discarded.discard("forceinline")
-    configs = [plain, nrt_off, copied, discarded]
-    for config in configs:
-        assert config.values() == numba_values(config)
-        assert list(config.values()) == list(numba_values(config))  # the same order too
-        assert hash(config) == numba_hash(config)
-    for a in configs:
-        for b in configs:
-            assert (a == b) == (numba_values(a) == numba_values(b))
-    assert nrt_off != plain and discarded == nrt_off and copied != nrt_off

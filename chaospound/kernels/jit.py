@@ -28,10 +28,8 @@ A generated engine module binds ``kernel`` and ``inline`` to
 compiled for other kernels only (:class:`InternalDispatcher`), except its loop.
 """
 
-from collections.abc import Mapping
-
 from numba import _dynfunc, config, njit
-from numba.core import compiler, targetconfig, types
+from numba.core import compiler, types
 from numba.core.codegen import JITCodeLibrary
 from numba.core.compiler_machinery import register_pass
 from numba.core.registry import CPUDispatcher
@@ -40,44 +38,6 @@ from numba.core.typed_passes import NativeLowering
 from .cache import invalidate_stale_cache
 
 invalidate_stale_cache()  # before any kernel is defined, so before any is loaded
-
-
-def _config_defaults(cls) -> dict:
-    """``{option: default}`` of a :class:`numba.core.targetconfig.TargetConfig` class,
-    built once per class (the defaults are class constants)."""
-    defaults = cls.__dict__.get("_chaospound_defaults")
-    if defaults is None:
-        defaults = {name: option.default for name, option in cls.options.items()}
-        cls._chaospound_defaults = defaults
-        cls._chaospound_hash = hash(tuple(sorted(defaults)))
-    return defaults
-
-
-def _config_values(self) -> dict:
-    """:meth:`TargetConfig.values`, the same dict, from the class's table of defaults."""
-    values = dict(_config_defaults(type(self)))
-    values.update((name, value) for name, value in self._values.items() if name in values)
-    return values
-
-
-def _config_hash(self) -> int:
-    """:meth:`TargetConfig.__hash__`, the same number: numba hashes the sorted option
-    names, a constant of the class."""
-    _config_defaults(type(self))
-    return type(self).__dict__["_chaospound_hash"]
-
-
-#: numba's compiler compares its flags (a TargetConfig) every time type inference
-#: resolves an operator through an ``@overload`` (17 000 times for one engine), and
-#: each comparison rebuilds the dict of all ~45 options through their properties:
-#: 15-25 % of an engine's compile time. The same values and hash, computed from a
-#: table of defaults built once per class, take a fraction of that; nothing numba
-#: compiles changes (tests/test_compose.py checks both against numba's own).
-_FAST_CONFIG = (isinstance(getattr(targetconfig.TargetConfig, "options", None), Mapping)
-                and "_values" in getattr(targetconfig.TargetConfig, "__slots__", ()))
-if _FAST_CONFIG:
-    targetconfig.TargetConfig.values = _config_values
-    targetconfig.TargetConfig.__hash__ = _config_hash
 
 
 class KernelDispatcher(CPUDispatcher):
