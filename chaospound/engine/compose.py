@@ -603,9 +603,10 @@ def _load(c: Composition) -> Engine:
 def _load_in_memory(c: Composition) -> types.ModuleType:
     """The module built from text, uncached (user functions bound as objects), once per
     process and compiled composition."""
-    module = _IN_MEMORY.get(c.compiled())
+    key = c.compiled()
+    module = _IN_MEMORY.get(key)
     if module is None:
-        module = _IN_MEMORY[c.compiled()] = _build_in_memory(c)
+        module = _IN_MEMORY[key] = _build_in_memory(key)
     return module
 
 
