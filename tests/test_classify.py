@@ -429,6 +429,39 @@ def test_translational_pounding_is_not_group_periodic(period_ratio, label):
     assert set(regime.corner_sequence) == {"face"}
 
 
+def test_a_slow_approach_to_a_stable_orbit_is_periodic_not_a_torus():
+    """fig4-translational at T/T_Ax 0.7458 (a point of the 1000-point scan). After the
+    2000-cycle transient the sections repeat at P = 16 only to some 5e-3, the exponent
+    over 200 cycles is zero within its error and the 0-1 test is regular: rules 1-6
+    read a torus (quasi-periodic with confidence 1, before rule 6b). The record closes
+    in on a stable period-16 orbit, its multipliers a complex pair at |mu| = 0.94, which
+    rule 6b names. Checked without Newton: a plain run at rtol 1e-11 from where a
+    2000-cycle transient at rtol 1e-8 ends settles on period 16 with 19 impacts per
+    period by itself (the rtol 1e-8 runs cannot show it: their noise keeps so weakly
+    stable an orbit's mismatch near tol)."""
+    from chaospound.simulate import simulate
+
+    scene = load_preset("fig4-translational").with_params(period_ratio=0.7458458458458459)
+    regime = classify(scene)
+    assert regime.label == "group-periodic 19-16"
+    assert regime.evidence["reached_by"] == "newton"
+    approach = regime.evidence["approach"]
+    assert approach["label"] == "quasi-periodic"  # rules 1-6
+    assert approach["period"] == 16
+    assert approach["distance_last_quarter"] < 0.5 * approach["distance_first_quarter"]
+    assert regime.floquet_exact
+    assert 0.93 < max(abs(z) for z in regime.floquet_multipliers) < 0.95
+    assert regime.transient_used > 2000
+    # independent of Newton: plain integration, tight enough to converge by itself
+    loose = simulate(scene.with_params(rtol=1e-8, atol=1e-10), transient=2000, record=1)
+    tight = simulate(scene.with_params(rtol=1e-11, atol=1e-13), transient=2000, record=48,
+                     initial_state=loose.strobe.state[-1], start_at_section=True)
+    states = tight.strobe.state
+    assert _mismatch(states, 16, _scale(states)) < 0.1 * DEFAULT_TOL
+    assert min(_mismatch(states, p, _scale(states)) for p in range(1, 16)) > 1e3 * DEFAULT_TOL
+    assert len(tight.impacts) == 3 * 19
+
+
 def test_system_and_scene_give_the_same_regime():
     scene = load_preset("fig4").with_params(period_ratio=1.3)
     assert classify(System.from_scene(scene)).label == classify(scene).label

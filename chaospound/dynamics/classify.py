@@ -68,9 +68,14 @@ The rules, in the order :func:`classify` applies them (the same text is in
    longer than max_period or a transient longer than max_transient). When
    lambda / sigma falls between 1 and 6 (near the 3-sigma line, where a
    200-cycle run decides by chance) the exponent is recomputed over 4 times as
-   many cycles. Without a 0-1 test (``test01=False``, or the few sections of a
-   sweep's record window) the exponent alone can show chaos but not
-   quasi-periodicity: |lambda| <= 3 sigma is then unresolved.
+   many cycles. 6b: where that says quasi-periodic or unresolved and the tail
+   repeats within ``NEWTON_TRY`` at some P (``floquet=True``), Newton's method
+   solves for the period-P orbit from the last section; a stable orbit that
+   the record closes in on (:func:`_approached_orbit`) is the attractor, read
+   from a window at its state (rules 4, 5 and 8). Without a 0-1 test
+   (``test01=False``, or the few sections of a sweep's record window) the
+   exponent alone can show chaos but not quasi-periodicity: |lambda| <= 3
+   sigma is then unresolved.
 7. Without an exponent (:func:`classify_sequence` on bare data) the 0-1 test
    decides: chaotic when K > 0.8, quasi-periodic when K < 0.2, unresolved
    between (and below 100 sections, where no K is computed).
@@ -153,6 +158,15 @@ AMBIGUOUS_Z = (1.0, 6.0)  #: lambda / sigma in this range: rerun the exponent LO
 LONGER_RUN = 4
 Z_FULL_CONFIDENCE = 10.0  #: lambda / sigma giving full confidence in chaos
 CONTRADICTED_CONFIDENCE = 0.5  #: at most this when the solved orbit contradicts the response
+NEWTON_TRY = 1e-2  #: a tail repeating within this (relative) at some P: Newton is tried at P
+NEWTON_TOL = 1e-7  #: Newton's relative residual (100 times below tol)
+NEWTON_ITER = 15  #: Newton iterations allowed per attempt
+#: an approached orbit: the record's last quarter is at most this times as far from the
+#: orbit as its first quarter (rule 6b) ...
+APPROACH_RATIO = 0.5
+#: ... or at most this times tol from it: the noise floor of a weakly stable orbit's runs
+NEAR_ORBIT = 10.0
+APPROACH_RTOL = 1e-3  #: rule 6b's Newton and window run at this times the rtol used
 
 
 @dataclass(frozen=True)
@@ -417,7 +431,108 @@ def classify(
         exponent_per_cycle=spectrum.max_exponent * spectrum.period,
         zero_one_points=int(states.shape[0]) if test01 else 0,
     )
+    if floquet and regime.regime in ("quasi-periodic", "unresolved"):
+        # 6b. a record that closes in on a stable orbit: a slow approach, not a torus
+        tight = _orbit_system(scene)
+        orbit = _approached_orbit(tight, states, weights, max_period, tol)
+        if orbit is not None:
+            report(f"no period within tol: closing in on a period-{orbit[1]['period']} orbit")
+            reached = _orbit_regime(tight, system, orbit, window, weights, max_period, tol,
+                                    section_phase)
+            if reached is not None:
+                approach = {**orbit[1], "label": regime.label,
+                            "exponent": regime.max_exponent,
+                            "exponent_error": regime.max_exponent_error,
+                            "zero_one": regime.zero_one}
+                evidence.update(reached_by="newton", approach=approach)
+                return replace(reached, transient_used=done + states.shape[0] - 1,
+                               evidence={**reached.evidence, **evidence})
+            evidence["approach"] = {**orbit[1], "result": "its window did not repeat"}
     return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
+
+
+def _orbit_system(scene: System) -> System:
+    """The classification's system at :data:`APPROACH_RTOL` times its rtol and atol
+    (a fixed-step method unchanged): rule 6b's Newton and window run on it.
+
+    The runs at the classification's rtol repeat a weakly stable orbit only to about
+    tol: one section of fig4-translational's period-16 orbit at T/T_Ax 0.7458 (|mu| =
+    0.94) is 3e-5 off after a period at rtol 1e-8, the others 1e-7; an orbit solved at
+    that rtol is off the tighter runs' by as much, which that section amplifies again.
+    """
+    if scene.method == "rk4":
+        return scene
+    return _with_solver(scene, {"rtol": APPROACH_RTOL * scene.rtol,
+                                "atol": APPROACH_RTOL * scene.atol})
+
+
+def _approached_orbit(scene: System, states: np.ndarray, weights: np.ndarray,
+                      max_period: int, tol: float) -> tuple[np.ndarray, dict] | None:
+    """Rule 6b: the stable period-P orbit a record without a period closes in on.
+
+    ``states`` are the record's consecutive sections (model units). Where their tail
+    repeats within :data:`NEWTON_TRY` at some P <= ``max_period`` (the smallest),
+    Newton's method (:func:`chaospound.orbits.shooting.newton_fixed_point`, the
+    solver settings of ``scene``, :func:`_orbit_system`; residual :data:`NEWTON_TOL`)
+    solves for the period-P orbit from the last section. Returned, as ``(state,
+    note)``, only when the orbit is stable (every multiplier of its monodromy inside
+    the unit circle) and the record approaches it: the mean distance of its last
+    quarter of sections to the orbit's P sections (relative to the state scale) is at
+    most :data:`APPROACH_RATIO` times its first quarter's, or at most
+    :data:`NEAR_ORBIT` times ``tol`` (where the runs' noise keeps a weakly stable
+    orbit's record). Else None.
+    """
+    from ..orbits import OrbitNotFound
+    from ..orbits.maps import StroboscopicMap
+    from ..orbits.shooting import newton_fixed_point
+    from ..simulate import SimulationError, simulate
+
+    scaled = states * weights
+    period = _converged_period(scaled[-_tail_length(max_period):], max_period, NEWTON_TRY)
+    if period is None or states.shape[0] < 8 * period:
+        return None
+    smap = StroboscopicMap.of(scene, rtol=scene.rtol, atol=scene.atol, method=None)
+    try:
+        state, monodromy, residual, iterations = newton_fixed_point(
+            smap, states[-1], period, tol=NEWTON_TOL, max_iter=NEWTON_ITER,
+            exact_monodromy=False)
+        mu = float(np.max(np.abs(np.linalg.eigvals(monodromy))))
+    except (OrbitNotFound, SimulationError, np.linalg.LinAlgError):
+        return None
+    if not mu < 1.0:
+        return None
+    orbit = simulate(scene, transient=0, record=period, initial_state=state,
+                     start_at_section=True).strobe.state[:period] * weights
+    distance = np.min(np.linalg.norm(scaled[:, None, :] - orbit[None, :, :], axis=2),
+                      axis=1) / _scale(scaled)
+    quarter = max(1, distance.size // 4)
+    first, last = float(distance[:quarter].mean()), float(distance[-quarter:].mean())
+    if not (last <= APPROACH_RATIO * first or last <= NEAR_ORBIT * tol):
+        return None
+    return state, {"period": period, "residual": residual, "iterations": iterations,
+                   "max_multiplier": mu, "distance_first_quarter": first,
+                   "distance_last_quarter": last, "sections": int(states.shape[0])}
+
+
+def _orbit_regime(scene: System, system: System, orbit: tuple[np.ndarray, dict], window: int,
+                  weights: np.ndarray, max_period: int, tol: float,
+                  section_phase: float) -> Regime | None:
+    """The regime of a record window from an approached orbit's state (rules 4, 5 and
+    8; ``scene`` at the orbit's solver settings, :func:`_orbit_system`), or None when
+    the window does not repeat at tol."""
+    from ..simulate import simulate
+
+    state, _ = orbit
+    record = simulate(scene, transient=0, record=window, initial_state=state,
+                      start_at_section=True)
+    imp = record.impacts
+    regime = classify_sequence(
+        record.strobe.state * weights, imp.cycle,
+        _phase_from_section(imp.time, imp.cycle, record.period, section_phase),
+        imp.velocity, imp.labels, max_period=max_period, tol=tol, test01=False)
+    if regime.regime not in ("periodic", "group-periodic"):
+        return None
+    return _with_floquet(regime, system, record.strobe.state[-1])
 
 
 def _with_floquet(regime: Regime, system: System, state: np.ndarray) -> Regime:

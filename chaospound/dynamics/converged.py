@@ -85,6 +85,9 @@ from ..scene import Scene
 from .classify import (
     ATOL_PER_RTOL,
     LONGER_RUN,
+    NEWTON_ITER,
+    NEWTON_TOL,
+    NEWTON_TRY,
     SIGMAS,
     TOL_PER_RTOL,
     TRANSIENT_MARGIN,
@@ -107,9 +110,6 @@ __all__ = ["ConvergedResult", "classify_converged"]
 WARM_FIRST = 10  #: cycles run first from a warm start
 FRESH_FIRST = 30  #: cycles run first from the scene's initial state
 CHUNK = 10  #: cycles per further run of sections
-NEWTON_TRY = 1e-2  #: tail mismatch below which Newton is tried at that period
-NEWTON_TOL = 1e-7  #: Newton's relative residual (100 times below the window's tol)
-NEWTON_ITER = 15  #: Newton iterations allowed per attempt
 NEWTON_ATTEMPTS = 2  #: attempts per period and point
 MU_MARGIN = 0.05  #: max|mu| <= 1 - MU_MARGIN: full confidence in the orbit's stability
 EXPONENT_AFTER = 40  #: cycles of sections without a period in sight before the exponent
