@@ -462,6 +462,19 @@ def test_a_slow_approach_to_a_stable_orbit_is_periodic_not_a_torus():
     assert len(tight.impacts) == 3 * 19
 
 
+def test_a_torus_near_a_resonance_stays_a_torus():
+    """fig4 at T/T_Ax 1.0539, a torus (tests/test_converged.py): its sections come
+    within 1e-2 of period 5, so rule 6b tries Newton there, and finds no orbit that
+    the record approaches; the label stays quasi-periodic and the evidence says what
+    was tried."""
+    regime = classify(load_preset("fig4").with_params(period_ratio=1.0539))
+    assert regime.regime == "quasi-periodic"
+    assert "reached_by" not in regime.evidence
+    approach = regime.evidence["approach"]
+    assert approach["period"] == 5
+    assert approach["result"] != "approached"
+
+
 def test_system_and_scene_give_the_same_regime():
     scene = load_preset("fig4").with_params(period_ratio=1.3)
     assert classify(System.from_scene(scene)).label == classify(scene).label

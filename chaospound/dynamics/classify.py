@@ -434,20 +434,21 @@ def classify(
     if floquet and regime.regime in ("quasi-periodic", "unresolved"):
         # 6b. a record that closes in on a stable orbit: a slow approach, not a torus
         tight = _orbit_system(scene)
-        orbit = _approached_orbit(tight, states, weights, max_period, tol)
-        if orbit is not None:
-            report(f"no period within tol: closing in on a period-{orbit[1]['period']} orbit")
-            reached = _orbit_regime(tight, system, orbit, window, weights, max_period, tol,
+        state, note = _approached_orbit(tight, states, weights, max_period, tol)
+        if state is not None:
+            report(f"no period within tol: closing in on a period-{note['period']} orbit")
+            reached = _orbit_regime(tight, system, state, window, weights, max_period, tol,
                                     section_phase)
             if reached is not None:
-                approach = {**orbit[1], "label": regime.label,
-                            "exponent": regime.max_exponent,
+                approach = {**note, "label": regime.label, "exponent": regime.max_exponent,
                             "exponent_error": regime.max_exponent_error,
                             "zero_one": regime.zero_one}
                 evidence.update(reached_by="newton", approach=approach)
                 return replace(reached, transient_used=done + states.shape[0] - 1,
                                evidence={**reached.evidence, **evidence})
-            evidence["approach"] = {**orbit[1], "result": "its window did not repeat"}
+            note["result"] = "approached, but its window did not repeat"
+        if note:
+            evidence["approach"] = note
     return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
 
 
@@ -467,20 +468,29 @@ def _orbit_system(scene: System) -> System:
 
 
 def _approached_orbit(scene: System, states: np.ndarray, weights: np.ndarray,
-                      max_period: int, tol: float) -> tuple[np.ndarray, dict] | None:
+                      max_period: int, tol: float) -> tuple[np.ndarray | None, dict]:
     """Rule 6b: the stable period-P orbit a record without a period closes in on.
 
     ``states`` are the record's consecutive sections (model units). Where their tail
     repeats within :data:`NEWTON_TRY` at some P <= ``max_period`` (the smallest),
     Newton's method (:func:`chaospound.orbits.shooting.newton_fixed_point`, the
     solver settings of ``scene``, :func:`_orbit_system`; residual :data:`NEWTON_TOL`)
-    solves for the period-P orbit from the last section. Returned, as ``(state,
-    note)``, only when the orbit is stable (every multiplier of its monodromy inside
+    solves for the period-P orbit from the last section. The orbit's state is
+    returned only when the orbit is stable (every multiplier of its monodromy inside
     the unit circle) and the record approaches it: the mean distance of its last
     quarter of sections to the orbit's P sections (relative to the state scale) is at
     most :data:`APPROACH_RATIO` times its first quarter's, or at most
     :data:`NEAR_ORBIT` times ``tol`` (where the runs' noise keeps a weakly stable
-    orbit's record). Else None.
+    orbit's record).
+
+    Returns
+    -------
+    state : ndarray or None
+        The orbit's section state, or None.
+    note : dict
+        Empty when no period is near; else the period tried and what came of it
+        (``result``; residual, iterations, ``max_multiplier`` and the two
+        distances as far as they were computed).
     """
     from ..orbits import OrbitNotFound
     from ..orbits.maps import StroboscopicMap
@@ -490,31 +500,36 @@ def _approached_orbit(scene: System, states: np.ndarray, weights: np.ndarray,
     scaled = states * weights
     period = _converged_period(scaled[-_tail_length(max_period):], max_period, NEWTON_TRY)
     if period is None or states.shape[0] < 8 * period:
-        return None
+        return None, {}
+    note: dict = {"period": period, "sections": int(states.shape[0])}
     smap = StroboscopicMap.of(scene, rtol=scene.rtol, atol=scene.atol, method=None)
     try:
         state, monodromy, residual, iterations = newton_fixed_point(
             smap, states[-1], period, tol=NEWTON_TOL, max_iter=NEWTON_ITER,
             exact_monodromy=False)
         mu = float(np.max(np.abs(np.linalg.eigvals(monodromy))))
-    except (OrbitNotFound, SimulationError, np.linalg.LinAlgError):
-        return None
+    except (OrbitNotFound, SimulationError, np.linalg.LinAlgError) as exc:
+        note["result"] = "no orbit: " + str(exc).splitlines()[0][:160]
+        return None, note
+    note.update(residual=residual, iterations=iterations, max_multiplier=mu)
     if not mu < 1.0:
-        return None
+        note["result"] = "unstable orbit"
+        return None, note
     orbit = simulate(scene, transient=0, record=period, initial_state=state,
                      start_at_section=True).strobe.state[:period] * weights
     distance = np.min(np.linalg.norm(scaled[:, None, :] - orbit[None, :, :], axis=2),
                       axis=1) / _scale(scaled)
     quarter = max(1, distance.size // 4)
     first, last = float(distance[:quarter].mean()), float(distance[-quarter:].mean())
+    note.update(distance_first_quarter=first, distance_last_quarter=last)
     if not (last <= APPROACH_RATIO * first or last <= NEAR_ORBIT * tol):
-        return None
-    return state, {"period": period, "residual": residual, "iterations": iterations,
-                   "max_multiplier": mu, "distance_first_quarter": first,
-                   "distance_last_quarter": last, "sections": int(states.shape[0])}
+        note["result"] = "stable orbit, not approached"
+        return None, note
+    note["result"] = "approached"
+    return state, note
 
 
-def _orbit_regime(scene: System, system: System, orbit: tuple[np.ndarray, dict], window: int,
+def _orbit_regime(scene: System, system: System, state: np.ndarray, window: int,
                   weights: np.ndarray, max_period: int, tol: float,
                   section_phase: float) -> Regime | None:
     """The regime of a record window from an approached orbit's state (rules 4, 5 and
@@ -522,7 +537,6 @@ def _orbit_regime(scene: System, system: System, orbit: tuple[np.ndarray, dict],
     the window does not repeat at tol."""
     from ..simulate import simulate
 
-    state, _ = orbit
     record = simulate(scene, transient=0, record=window, initial_state=state,
                       start_at_section=True)
     imp = record.impacts
