@@ -452,6 +452,10 @@ def test_a_slow_approach_to_a_stable_orbit_is_periodic_not_a_torus():
     assert regime.floquet_exact
     assert 0.93 < max(abs(z) for z in regime.floquet_multipliers) < 0.95
     assert regime.transient_used > 2000
+    from chaospound.cli.classify import _classify_report
+
+    assert "Newton at P = 16: the record closed in on the orbit" in _classify_report(
+        scene, regime, None)
     # independent of Newton: plain integration, tight enough to converge by itself
     loose = simulate(scene.with_params(rtol=1e-8, atol=1e-10), transient=2000, record=1)
     tight = simulate(scene.with_params(rtol=1e-11, atol=1e-13), transient=2000, record=48,

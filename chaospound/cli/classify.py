@@ -202,6 +202,15 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
         ("solver", f"{solver.method}, {accuracy}"),
         ("wall time", f"{_command_seconds():.3g} s the whole command"),
     ]  # fmt: skip
+    approach = evidence.get("approach")
+    if evidence.get("reached_by") == "newton":  # rule 6b
+        rows.insert(rows.index(("confidence", f"{regime.confidence:.2f}")), (
+            "reached by",
+            f"Newton at P = {approach['period']}: the record closed in on the orbit "
+            f"({approach['distance_first_quarter']:.2g} -> "
+            f"{approach['distance_last_quarter']:.2g} of the scale over "
+            f"{approach['sections']} sections; Newton and the window at 1e-3 times the "
+            f"rtol); rule 6 alone said {approach['label']}"))
     if plot is not None:
         rows.append(("wrote", plot))
     return _table(None, rows, "ll") + "\n"
