@@ -82,9 +82,9 @@ The rules, in the order :func:`classify` applies them (the same text is in
 8. Periodic and group-periodic responses (``floquet=True``, the default): the
    orbit is solved by Newton shooting from the last section of the record
    window with period P (:func:`chaospound.orbits.floquet.response_floquet`:
-   rtol 1e-12, dop853, residual 1e-10 of the state scale). Its multipliers mu
-   and Floquet exponents log|mu| / (P T) are the response's Lyapunov exponents,
-   exact up to the integration tolerance (``floquet_exponents``;
+   rtol 1e-12, the response's own scheme, residual 1e-10 of the state scale).
+   Its multipliers mu and Floquet exponents log|mu| / (P T) are the response's
+   Lyapunov exponents, exact up to the integration tolerance (``floquet_exponents``;
    ``evidence["floquet"]`` says how: the variational monodromy, or, for a law
    whose tangent dynamics the engine refuses, a finite-difference one). The
    orbit confirms the response when Newton stays within 1e-3 of the state scale
