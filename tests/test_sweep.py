@@ -313,9 +313,11 @@ def references(tmp_path_factory):
 
 
 def interrupt_midway(path: Path, sig: int, *extra: str) -> tuple[int, int, str, int]:
-    """Start the CLI sweep in a subprocess, send ``sig`` once a quarter of the points are
-    in the file; retry with four times the points if it finished first. SIGINT goes to
-    the whole process group (workers included), as a terminal's Ctrl-C does.
+    """Start the CLI sweep in a subprocess, send ``sig`` once a quarter to three
+    quarters of the points are in the file (a window wider than one commit: the sweep
+    commits 256 points at a time, or what a second brings); retry with four times the
+    points if it finished first. SIGINT goes to the whole process group (workers
+    included), as a terminal's Ctrl-C does.
 
     Returns (points, exit code, stderr, points done when the signal was sent). Points are
     committed about once a second, so the sweep must run for a few seconds (~1000 points).
@@ -339,7 +341,7 @@ def interrupt_midway(path: Path, sig: int, *extra: str) -> tuple[int, int, str, 
                     done = sweep_progress(path)[0]
                 except (SweepStoreError, OSError):
                     done = 0
-                if n // 4 <= done < n // 2:
+                if n // 4 <= done < 3 * n // 4:
                     if sig == signal.SIGINT:
                         os.killpg(proc.pid, sig)
                     else:
