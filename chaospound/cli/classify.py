@@ -202,8 +202,8 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
         ("solver", f"{solver.method}, {accuracy}"),
         ("wall time", f"{_command_seconds():.3g} s the whole command"),
     ]  # fmt: skip
-    approach = evidence.get("approach")
     if evidence.get("reached_by") == "newton":  # rule 6b
+        approach = evidence["approach"]
         rows.insert(rows.index(("confidence", f"{regime.confidence:.2f}")), (
             "reached by",
             f"Newton at P = {approach['period']}: the record closed in on the orbit "

@@ -492,10 +492,8 @@ def _approached_orbit(scene: System, states: np.ndarray, weights: np.ndarray,
         (``result``; residual, iterations, ``max_multiplier`` and the two
         distances as far as they were computed).
     """
-    from ..orbits import OrbitNotFound
     from ..orbits.maps import StroboscopicMap
-    from ..orbits.shooting import newton_fixed_point
-    from ..simulate import SimulationError, simulate
+    from ..simulate import simulate
 
     scaled = states * weights
     period = _converged_period(scaled[-_tail_length(max_period):], max_period, NEWTON_TRY)
@@ -503,16 +501,12 @@ def _approached_orbit(scene: System, states: np.ndarray, weights: np.ndarray,
         return None, {}
     note: dict = {"period": period, "sections": int(states.shape[0])}
     smap = StroboscopicMap.of(scene, rtol=scene.rtol, atol=scene.atol, method=None)
-    try:
-        state, monodromy, residual, iterations = newton_fixed_point(
-            smap, states[-1], period, tol=NEWTON_TOL, max_iter=NEWTON_ITER,
-            exact_monodromy=False)
-        mu = float(np.max(np.abs(np.linalg.eigvals(monodromy))))
-    except (OrbitNotFound, SimulationError, np.linalg.LinAlgError) as exc:
-        note["result"] = "no orbit: " + str(exc).splitlines()[0][:160]
+    state, found = newton_orbit(smap, states[-1], period)
+    note.update(found)
+    if state is None:
+        note["result"] = "no orbit: " + note["result"]
         return None, note
-    note.update(residual=residual, iterations=iterations, max_multiplier=mu)
-    if not mu < 1.0:
+    if not note["max_multiplier"] < 1.0:
         note["result"] = "unstable orbit"
         return None, note
     orbit = simulate(scene, transient=0, record=period, initial_state=state,
@@ -527,6 +521,30 @@ def _approached_orbit(scene: System, states: np.ndarray, weights: np.ndarray,
         return None, note
     note["result"] = "approached"
     return state, note
+
+
+def newton_orbit(smap, start: np.ndarray, period: int, *,
+                 give_up_early: bool = False) -> tuple[np.ndarray | None, dict]:
+    """The period-``period`` orbit of ``smap`` by Newton's method from ``start``
+    (residual :data:`NEWTON_TOL`, at most :data:`NEWTON_ITER` iterations, the
+    monodromy at the chord iterations' rtol: its stability, not its digits, is asked).
+
+    Returns ``(state, note)``: the orbit's section state and ``{"residual",
+    "iterations", "max_multiplier"}``, or ``(None, {"result": why})`` when Newton or
+    its runs fail. Rule 6b and the converged classification's step 3 both use it.
+    """
+    from ..orbits import OrbitNotFound
+    from ..orbits.shooting import newton_fixed_point
+    from ..simulate import SimulationError
+
+    try:
+        state, monodromy, residual, iterations = newton_fixed_point(
+            smap, start, period, tol=NEWTON_TOL, max_iter=NEWTON_ITER,
+            exact_monodromy=False, give_up_early=give_up_early)
+        mu = float(np.max(np.abs(np.linalg.eigvals(monodromy))))
+    except (OrbitNotFound, SimulationError, np.linalg.LinAlgError) as exc:
+        return None, {"result": str(exc).splitlines()[0][:160]}
+    return state, {"residual": residual, "iterations": iterations, "max_multiplier": mu}
 
 
 def _orbit_regime(scene: System, system: System, state: np.ndarray, window: int,

@@ -85,8 +85,6 @@ from ..scene import Scene
 from .classify import (
     ATOL_PER_RTOL,
     LONGER_RUN,
-    NEWTON_ITER,
-    NEWTON_TOL,
     NEWTON_TRY,
     SIGMAS,
     TOL_PER_RTOL,
@@ -102,6 +100,7 @@ from .classify import (
     _with_solver,
     classify_sequence,
     length_weights,
+    newton_orbit,
 )
 from .system import System, advance, as_system, evolve
 
@@ -307,25 +306,19 @@ class _Classifier:
         return None
 
     def _newton(self, period: int) -> ConvergedResult | None:
-        from ..orbits import OrbitNotFound
         from ..orbits.maps import StroboscopicMap
-        from ..orbits.shooting import newton_fixed_point
-        from ..simulate import SimulationError
 
         if self._smap is None:
             self._smap = StroboscopicMap.of(self.target, rtol=self.rtol, atol=self.atol,
                                             method=None)
         note = {"period": period, "after_cycles": self.cycles}
-        try:  # the fixed point and its stability (the window reads the impacts)
-            state, monodromy, residual, iterations = newton_fixed_point(
-                self._smap, self._last(), period, tol=NEWTON_TOL, max_iter=NEWTON_ITER,
-                exact_monodromy=False, give_up_early=True)
-            mu = float(np.max(np.abs(np.linalg.eigvals(monodromy))))
-        except (OrbitNotFound, SimulationError, np.linalg.LinAlgError) as exc:
-            note["result"] = str(exc).splitlines()[0][:160]
+        # the fixed point and its stability (the window reads the impacts)
+        state, found = newton_orbit(self._smap, self._last(), period, give_up_early=True)
+        note.update(found)
+        if state is None:
             self.evidence["newton"].append(note)
             return None
-        note.update(residual=residual, iterations=iterations, max_multiplier=mu)
+        residual, mu = note["residual"], note["max_multiplier"]
         if not mu < 1.0:
             note["result"] = "unstable orbit"
             self.evidence["newton"].append(note)
