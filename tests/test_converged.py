@@ -162,6 +162,49 @@ def test_a_torus_whose_block_exponents_drift_together_is_not_chaotic():
     assert classify(point).regime == "quasi-periodic"
 
 
+@pytest.mark.parametrize("period_ratio", [0.9398398398398398, 1.1508508508508508])
+def test_weak_chaos_whose_exponent_leans_positive_is_not_a_torus(period_ratio):
+    """Points of the 1000-point fig4 scan with a largest exponent of about 0.008,
+    1 to 3 standard errors above zero after the 300-cycle cap, and a plain 0-1 test
+    under 0.2 (its 1000 sections are a few dozen Lyapunov times): rule 6 read them
+    quasi-periodic. The exponent now goes on (as classify's rerun near the 3-sigma
+    line) and crosses 3 sigma: chaotic, as classify names them after a 6000-cycle
+    transient and 1600 cycles of exponent."""
+    point = FIG4.with_params(period_ratio=period_ratio)
+    regime = classify_converged(point).regime
+    stages = regime.evidence["exponent_stages"]
+    assert stages[0]["cycles"] == 300 and 1.0 < stages[0]["exponent_over_error"] < 3.0
+    assert "over 1 sigma" in stages[-1]["decision"]
+    assert regime.regime == "chaotic"
+    assert regime.max_exponent > 3 * regime.max_exponent_error
+    careful = classify(point, max_transient=6000)
+    assert careful.regime == "chaotic"
+    assert careful.max_exponent == pytest.approx(regime.max_exponent, rel=0.5)
+
+
+def test_a_positive_exponent_is_not_vetoed_by_too_short_a_zero_one_record():
+    """fig4 at gap 1.4573, T/T_Ax 0.7357 (a point of the 200 x 200 map): weak chaos,
+    an exponent of about 0.006 per unit t (0.028 a cycle) several standard errors
+    above zero, but K = 0.10 to 0.18 over 1000 sections, whose veto left the point
+    unresolved in both classifications (the converged one first read it
+    quasi-periodic). The 0-1 test needs more Lyapunov times: over 4000 sections K
+    is 0.36 (0.83 over 16000), and both name it chaotic."""
+    point = FIG4.with_params(gap=1.457286432160804, period_ratio=0.735678391959799)
+    fast = classify_converged(point)
+    careful = classify(point, max_transient=6000)
+    for regime in (fast.regime, careful):
+        assert regime.evidence["zero_one_vetoed"] < 0.2
+        assert regime.evidence["sections"] == 4 * ZERO_ONE_CYCLES + 1
+        assert regime.zero_one >= 0.2
+        assert regime.regime == "chaotic"
+        assert regime.max_exponent > 3 * regime.max_exponent_error
+    # the stored record is the one read: its 4001 sections, the last cycles' impacts
+    assert fast.record.strobe.state.shape[0] == 4 * ZERO_ONE_CYCLES + 1
+    assert np.all(np.diff(fast.record.strobe.cycle) == 1)
+    assert np.all(fast.record.impacts.cycle >= 4 * ZERO_ONE_CYCLES - MIN_WINDOW)
+    assert np.array_equal(fast.final_state, fast.record.strobe.state[-1])
+
+
 def test_the_zero_one_record_keeps_its_sections_and_the_last_impacts():
     """A label read by the 0-1 test (the torus at T/T_Ax 1.0539) stores the record's
     1001 sections and the impacts of its last ``record`` cycles only, on the record's

@@ -426,6 +426,27 @@ def classify(
         max_period=max_period, tol=tol, exponent=spectrum.max_exponent,
         exponent_error=spectrum.max_error, test01=test01,
     )
+    if test01 and vetoed(regime):
+        # the 0-1 test's veto of a positive exponent: weak chaos needs more Lyapunov
+        # times than 1000 sections hold before K rises; LONGER_RUN x the sections
+        report(f"no period: {(LONGER_RUN - 1) * ZERO_ONE_CYCLES} more cycles for the 0-1 "
+               "test (it vetoes a positive exponent)")
+        more = simulate(scene, transient=0, record=(LONGER_RUN - 1) * ZERO_ONE_CYCLES,
+                        initial_state=last, start_at_section=True)
+        extra = more.impacts
+        cycles = np.concatenate([cycles, extra.cycle + states.shape[0] - 1])
+        local_phase = np.concatenate(
+            [local_phase, _phase_from_section(extra.time, extra.cycle, more.period,
+                                              section_phase)])
+        velocity = np.concatenate([velocity, extra.velocity])
+        labels = labels + extra.labels
+        states, last = np.concatenate([states, more.strobe.state[1:]]), more.strobe.state[-1]
+        evidence["zero_one_vetoed"] = regime.zero_one
+        regime = classify_sequence(
+            states * weights, cycles, local_phase, velocity, labels,
+            max_period=max_period, tol=tol, exponent=spectrum.max_exponent,
+            exponent_error=spectrum.max_error, test01=test01,
+        )
     evidence.update(
         lyapunov_cycles=lyapunov_cycles,
         exponent_per_cycle=spectrum.max_exponent * spectrum.period,
@@ -1089,6 +1110,22 @@ def _aperiodic_regime(exponent, error, zero_one, evidence) -> tuple[str, float]:
     if zero_one < ZERO_ONE_REGULAR:
         return "quasi-periodic", k_regular
     return "unresolved", 0.0
+
+
+def vetoed(regime: Regime) -> bool:
+    """Rule 6's veto: an unresolved reading whose exponent is above 3 sigma and
+    whose 0-1 test, with and without the bands, says "regular" (K < 0.2).
+
+    The 0-1 test needs its record to span many Lyapunov times: fig4 at T/T_Ax
+    0.7357, gap 1.4573 (an exponent of 0.0061 +- 0.0005, 0.028 a cycle) gives K =
+    0.18 over 1000 sections, 0.37 over 4000 and 0.83 over 16000. Both
+    classifications then read LONGER_RUN times the sections before the veto stands.
+    """
+    if regime.regime != "unresolved" or regime.zero_one is None:
+        return False
+    z = regime.evidence.get("exponent_over_error")
+    k = max(regime.zero_one, regime.evidence.get("zero_one_banded", regime.zero_one))
+    return z is not None and z > SIGMAS and k < ZERO_ONE_REGULAR
 
 
 def _zero_one_chaos(k: float) -> float:

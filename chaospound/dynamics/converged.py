@@ -59,10 +59,15 @@ confidences of ``docs/classification.md``), doing less work per point:
    twice (a weakly stable orbit, blurred by the looser runs), the search goes
    back to step 3, else
    :func:`classify_sequence` applies classify's rule 6 (period, then lambda
-   against 3 sigma and K). Where rule 6 cannot name the point, the exponent
+   against 3 sigma and K). Where rule 6 cannot name the point, or names it
+   quasi-periodic with lambda more than 1 sigma above zero (weak chaos, its 0-1
+   test still below 0.2 over 1000 sections, looks so at the cap), the exponent
    goes on from the record's end, up to ``LONGER_RUN`` times ``EXPONENT_CAP``
    cycles in all (classify's rerun near the 3-sigma line), stopping early as in
-   step 4, and rule 6 reads the record again with it.
+   step 4, and rule 6 reads the record again with it. Where the 0-1 test vetoes a
+   positive exponent (:func:`~chaospound.dynamics.classify.vetoed`), the record
+   goes on for ``LONGER_RUN - 1`` times ``ZERO_ONE_CYCLES`` more sections, as
+   classify's rule 6 does, and rule 6 reads the whole.
 6. Budget. At most ``max_transient`` cycles of sections and exponents;
    beyond, ``unresolved`` with the reason in ``evidence["why"]``.
 
@@ -83,6 +88,7 @@ import numpy as np
 
 from ..scene import Scene
 from .classify import (
+    AMBIGUOUS_Z,
     ATOL_PER_RTOL,
     LONGER_RUN,
     NEWTON_TRY,
@@ -101,6 +107,7 @@ from .classify import (
     classify_sequence,
     length_weights,
     newton_orbit,
+    vetoed,
 )
 from .system import System, advance, as_system, evolve
 
@@ -473,11 +480,23 @@ class _Classifier:
             return None
         regime = self._read_record(record, lam, err)
         self.evidence["decided_by"] = "exponent and 0-1 test"
-        if regime.regime == "unresolved" and self.cycles < self.max_transient:
-            # the two disagree: near the 3-sigma line a run of EXPONENT_CAP cycles
-            # decides by chance, so the exponent goes on from the record's end for up to
-            # LONGER_RUN times as long in all, as classify's rerun does, and decides anew
-            lam, err = self._longer_exponent(record, blocks)
+        leaning = regime.regime == "quasi-periodic" and lam > AMBIGUOUS_Z[0] * err
+        if (regime.regime == "unresolved" or leaning) and self.cycles < self.max_transient:
+            # the two disagree, or a torus's exponent leans positive: near the 3-sigma
+            # line a run of EXPONENT_CAP cycles decides by chance (weak chaos's exponent
+            # of a few 1e-3 is 1 to 3 sigma after 300 cycles, and 1000 sections are too
+            # few for its 0-1 test), so the exponent goes on from the record's end for up
+            # to LONGER_RUN times as long in all, as classify's rerun does, and decides anew
+            lam, err = self._longer_exponent(record, blocks, leaning)
+            regime = self._read_record(record, lam, err)
+        if vetoed(regime):
+            # a positive exponent that the 0-1 test calls regular: LONGER_RUN times the
+            # sections before the veto stands, as classify does (weak chaos's K rises
+            # only over many Lyapunov times)
+            more = self._zero_one_record(record.strobe.state[-1],
+                                         (LONGER_RUN - 1) * ZERO_ONE_CYCLES)
+            record = _joined(record, more)
+            self.evidence["zero_one_vetoed"] = regime.zero_one
             regime = self._read_record(record, lam, err)
         if regime.regime == "unresolved":
             k = regime.zero_one
@@ -489,10 +508,10 @@ class _Classifier:
                 + ("" if digits is None else f", Birkhoff average to {digits:.1f} digits")
                 + " do not agree on a regime")
         return self._result(regime, record, confidence=regime.confidence,
-                            window=ZERO_ONE_CYCLES)
+                            window=record.record)
 
-    def _zero_one_record(self, state):
-        """``ZERO_ONE_CYCLES`` sections from ``state``, with the impacts of the last
+    def _zero_one_record(self, state, cycles: int = ZERO_ONE_CYCLES):
+        """``cycles`` sections from ``state``, with the impacts of the last
         ``record`` cycles only (locating every impact and its peak is about 30 % of such
         a run, and rule 6 reads only the sections). The impacts of the whole window
         where the label may need them: none in those cycles (rule 5 would read
@@ -500,8 +519,8 @@ class _Classifier:
         reads the impacts of the whole window)."""
         from ..simulate import RunStats, Strobe, run_stats, simulate
 
-        window = min(max(self.record, 2), ZERO_ONE_CYCLES)
-        offset = ZERO_ONE_CYCLES - window
+        window = min(max(self.record, 2), cycles)
+        offset = cycles - window
         head = evolve(self.flow, state, cycles=offset, start_at_section=True)
         record = simulate(self.flow, transient=0, record=window, initial_state=head.state,
                           start_at_section=True)
@@ -509,17 +528,16 @@ class _Classifier:
         scaled = states * self.weights
         if (len(record.impacts) == 0
                 or _best_mismatch(scaled, _scale(scaled), self.max_period) < self.tol):
-            return simulate(self.flow, transient=0, record=ZERO_ONE_CYCLES,
+            return simulate(self.flow, transient=0, record=cycles,
                             initial_state=state, start_at_section=True)
         period = self.flow.period
         imp = record.impacts
         impacts = replace(imp, time=imp.time + offset * period, cycle=imp.cycle + offset)
-        k = np.arange(ZERO_ONE_CYCLES + 1)
+        k = np.arange(cycles + 1)
         strobe = Strobe(cycle=k, time=head.section_times[0] + k * period, state=states)
         stats = RunStats(*(a + b for a, b in zip(astuple(run_stats(head)),
                                                  astuple(record.stats), strict=True)))
-        return replace(record, impacts=impacts, strobe=strobe, stats=stats,
-                       record=ZERO_ONE_CYCLES)
+        return replace(record, impacts=impacts, strobe=strobe, stats=stats, record=cycles)
 
     def _read_record(self, record, lam: float, err: float) -> Regime:
         """Rule 6 on a record of sections and impacts, with the exponent and the 0-1 test."""
@@ -540,7 +558,8 @@ class _Classifier:
         self.cycles += TANGENT_ALIGN
         return augmented
 
-    def _longer_exponent(self, record, blocks: list[float]) -> tuple[float, float]:
+    def _longer_exponent(self, record, blocks: list[float],
+                         leaning: bool = False) -> tuple[float, float]:
         """More exponent blocks (appended to ``blocks``) from the end of the 0-1 record.
         Returns ``(lambda, sigma)`` over all the blocks."""
         augmented = self._aligned_tangent(record.strobe.state[-1])
@@ -550,7 +569,9 @@ class _Classifier:
             "cycles": BLOCK * (len(blocks) - before), "blocks": len(blocks) - before,
             "exponent": lam, "error": err,
             "exponent_over_error": z,
-            "decision": "exponent and 0-1 test disagreed: the exponent went on"})
+            "decision": ("a quasi-periodic reading with an exponent over 1 sigma: the "
+                         "exponent went on") if leaning else
+                        "exponent and 0-1 test disagreed: the exponent went on"})
         return lam, err
 
     # ------------------------------------------------------------- results
@@ -584,6 +605,24 @@ def _exponent_system(target: System, rtol: float) -> System:
     if target.method == "rk4" or rtol >= EXPONENT_RTOL:
         return target
     return _with_solver(target, {"rtol": EXPONENT_RTOL, "atol": ATOL_PER_RTOL * EXPONENT_RTOL})
+
+
+def _joined(first, second):
+    """One record: ``first``, then ``second`` (run from first's last section): the
+    sections of both, the impacts of ``second`` (the last cycles' impacts, as a 0-1
+    record keeps), the work of both."""
+    from ..simulate import RunStats, Strobe
+
+    offset, period = first.record, second.period
+    imp = second.impacts
+    impacts = replace(imp, time=imp.time + offset * period, cycle=imp.cycle + offset)
+    k = np.arange(offset + second.record + 1)
+    states = np.concatenate([first.strobe.state, second.strobe.state[1:]])
+    strobe = Strobe(cycle=k, time=first.strobe.time[0] + k * period, state=states)
+    stats = RunStats(*(a + b for a, b in zip(astuple(first.stats), astuple(second.stats),
+                                             strict=True)))
+    return replace(second, impacts=impacts, strobe=strobe, stats=stats,
+                   record=offset + second.record)
 
 
 def _mean_and_error(blocks: list[float]) -> tuple[float, float]:
