@@ -40,6 +40,13 @@ quasi-periodic and unresolved point, 1000 sections from its stored final state a
 the classification's tolerances, the observable of rule 6 (the scaled sections on
 their first principal direction). Writes results/classify_birkhoff.json.
 
+``changes``: where two stores of the same scan (``--old``, ``--new``: say the default
+sweep before and after a change of the classification) name a point differently,
+which one the careful classifier (as in ``agreement``) supports: for each pair
+(old regime, new regime), ``--per-change`` points drawn at random (``--seed``) are
+classified carefully. Writes results/classify_changes.json and .md, or ``--output``
+(its .md beside).
+
 ``table``: the careful classifier (:func:`~chaospound.dynamics.classify.classify`, its
 defaults) at the T/T_Ax of docs/classification.md's "Measured" table, fig4 and
 fig4-translational; prints the table's rows.
@@ -52,6 +59,8 @@ Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds
      PYTHONPATH=. python benchmarks/bench_classify.py agreement --per-set 67
      PYTHONPATH=. python benchmarks/bench_classify.py birkhoff
      PYTHONPATH=. python benchmarks/bench_classify.py table
+     PYTHONPATH=. python benchmarks/bench_classify.py changes --preset fig4 \
+         --old before.h5 --new after.h5 --per-change 16
 """
 
 from __future__ import annotations
@@ -298,6 +307,62 @@ def birkhoff() -> dict:
     return out
 
 
+def changes(preset: str, old: Path, new: Path, per_change: int, seed: int,
+            careful_transient: int, careful_exponent: int) -> dict:
+    from collections import Counter
+
+    from chaospound import open_sweep
+
+    with open_sweep(old) as store:
+        before = store.to_xarray()
+    with open_sweep(new) as store:
+        after = store.to_xarray()
+    dims = [d for d in after.regime.dims if d != "branch"]
+    was, now = before.regime.values, after.regime.values
+    if was.shape != now.shape:
+        raise SystemExit(f"{old} and {new} are not the same grid: {was.shape}, {now.shape}")
+    coords = [after[d].values for d in dims]
+    changed = Counter(zip(was[was != now].tolist(), now[was != now].tolist(), strict=True))
+    rng = np.random.default_rng(seed)
+    scene = load_preset(preset)
+    rows = []
+    for a, b in sorted(changed, key=lambda change: -changed[change]):
+        where = np.argwhere((was == a) & (now == b))
+        for p in rng.choice(len(where), size=min(per_change, len(where)), replace=False):
+            index = where[p][-len(dims):]
+            values = {d: float(c[i]) for d, c, i in zip(dims, coords, index, strict=True)}
+            careful = classify(scene.with_params(**values), max_transient=careful_transient,
+                               lyapunov_cycles=careful_exponent)
+            rows.append({"old": a, "new": b, "values": values, "careful": careful.regime,
+                         "careful_label": careful.label})
+            print(f"{values}: {a} -> {b}; careful {careful.label}", flush=True)
+    summary: dict = {
+        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+        "points": int(was.size), "changed": {f"{a} -> {b}": n for (a, b), n in changed.items()},
+        "careful_max_transient": careful_transient,
+        "careful_exponent_cycles": careful_exponent, "by_change": {}, "rows": rows}
+    for a, b in changed:
+        sub = [r for r in rows if (r["old"], r["new"]) == (a, b)]
+        summary["by_change"][f"{a} -> {b}"] = {
+            "sampled": len(sub), "careful_says_new": sum(r["careful"] == b for r in sub),
+            "careful_says_old": sum(r["careful"] == a for r in sub)}
+    return summary
+
+
+def _changes_markdown(s: dict) -> str:
+    lines = ["# Changed labels of a scan, against the careful classifier", "",
+             f"Command: `PYTHONPATH=. {s['command']}`", "",
+             f"{sum(s['changed'].values())} of {s['points']} points changed regime. For each "
+             "change, a random sample classified by the careful classifier (up to "
+             f"{s['careful_max_transient']} transient cycles, {s['careful_exponent_cycles']} "
+             "exponent cycles):", "",
+             "| change | points | sampled | careful says new | careful says old |",
+             "|---|---|---|---|---|"]
+    lines += [f"| {k} | {s['changed'][k]} | {v['sampled']} | {v['careful_says_new']} | "
+              f"{v['careful_says_old']} |" for k, v in s["by_change"].items()]
+    return "\n".join(lines) + "\n"
+
+
 TABLE_RATIOS = (0.30, 0.45, 0.50, 0.60, 0.65, 0.70, 0.75, 0.80, 0.85, 0.90, 0.95, 1.00, 1.05,
                 1.10, 1.20, 1.25, 1.30, 1.40, 1.60, 1.80, 2.00)
 
@@ -356,6 +421,15 @@ def main() -> None:
     ag.add_argument("--careful-exponent", type=int, default=400)
     sub.add_parser("birkhoff")
     sub.add_parser("table")
+    ch = sub.add_parser("changes")
+    ch.add_argument("--preset", required=True)
+    ch.add_argument("--old", type=Path, required=True, help="the store before")
+    ch.add_argument("--new", type=Path, required=True, help="the store after")
+    ch.add_argument("--per-change", type=int, default=16)
+    ch.add_argument("--seed", type=int, default=1)
+    ch.add_argument("--careful-transient", type=int, default=6000)
+    ch.add_argument("--careful-exponent", type=int, default=400)
+    ch.add_argument("--output", type=Path, default=RESULTS / "classify_changes.json")
     args = parser.parse_args()
     RESULTS.mkdir(exist_ok=True)
     if args.part == "speed":
@@ -366,6 +440,14 @@ def main() -> None:
         args.output.write_text(json.dumps(out, indent=1) + "\n")
     elif args.part == "table":
         out = table()
+    elif args.part == "changes":
+        from chaospound.sweep import single_thread_blas
+
+        single_thread_blas()
+        out = changes(args.preset, args.old, args.new, args.per_change, args.seed,
+                      args.careful_transient, args.careful_exponent)
+        args.output.write_text(json.dumps(out, indent=1) + "\n")
+        args.output.with_suffix(".md").write_text(_changes_markdown(out))
     elif args.part == "birkhoff":
         out = birkhoff()
         (RESULTS / "classify_birkhoff.json").write_text(json.dumps(out, indent=1) + "\n")

@@ -501,12 +501,17 @@ class _Classifier:
         if regime.regime == "unresolved":
             k = regime.zero_one
             digits = regime.evidence.get("birkhoff_digits")
+            sections = record.strobe.state.shape[0]
             self.evidence["why"] = (
-                f"exponent {lam:+.3g} +- {err:.2g} within {Z_EARLY:g} sigma after "
-                f"{BLOCK * len(blocks)} cycles and 0-1 test K = "
-                + ("n/a" if k is None else f"{k:.2f}")
-                + ("" if digits is None else f", Birkhoff average to {digits:.1f} digits")
-                + " do not agree on a regime")
+                f"exponent {lam:+.3g} +- {err:.2g} ({lam / max(err, 1e-300):+.1f} sigma) "
+                f"after {BLOCK * len(blocks)} cycles"
+                + (f", but the 0-1 test over {sections} sections says regular (K = "
+                   f"{k:.2f})" if vetoed(regime) else
+                   " and 0-1 test K = "
+                   + ("n/a" if k is None else f"{k:.2f}")
+                   + ("" if digits is None else
+                      f", Birkhoff average to {digits:.1f} digits")
+                   + " do not agree on a regime"))
         return self._result(regime, record, confidence=regime.confidence,
                             window=record.record)
 
