@@ -543,3 +543,18 @@ def test_cli_classify_bad_input_is_one_line_exit_2(capsys, options):
     assert code == 2
     assert out == ""
     assert len(err.splitlines()) == 1 and err.startswith("chaospound: error: ")
+
+
+def test_cli_report_says_when_the_zero_one_record_was_extended():
+    """A 0-1 test that vetoed a positive exponent over 1001 sections is rerun over 4001
+    (rule 6); the report gives both Ks and the record's length."""
+    from chaospound.cli.classify import _classify_report
+
+    evidence = {"tol": 1e-5, "best_period": 4, "rtol": 1e-8, "atol": 1e-10, "model": "towers",
+                "window_cycles": 64, "sections": 4001, "zero_one_vetoed": 0.149}
+    regime = Regime("chaotic", strobe_mismatch=0.21, max_exponent=0.005,
+                    max_exponent_error=0.001, zero_one=0.363, confidence=0.3,
+                    evidence=evidence)
+    [row] = [line for line in _classify_report(load_preset("fig4"), regime, None).splitlines()
+             if "0-1 test K" in line]
+    assert "0.363 (over 4001 sections; 0.149 over the first 1001" in row

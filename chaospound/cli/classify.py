@@ -172,6 +172,10 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
     if evidence.get("zero_one_banded") is not None:  # rule 6: banded chaos
         zero_one += (f"; {evidence['zero_one_banded']:.3f} less the means of "
                      f"{evidence['zero_one_bands']} bands")
+    if evidence.get("zero_one_vetoed") is not None:  # rule 6: the veto needs more sections
+        zero_one += (f" (over {evidence.get('sections')} sections; "
+                     f"{evidence['zero_one_vetoed']:.3f} over the first 1001, which vetoed "
+                     "the exponent)")
     digits = evidence.get("birkhoff_digits")  # rule 6's other test of regularity
     birkhoff = [] if digits is None else [
         ("Birkhoff average", f"{digits:.1f} digits (regular at >= 5)")]
