@@ -405,20 +405,6 @@ def test_fig4_at_0_9_is_chaotic():
     assert f"{regime.evidence['birkhoff_digits']:.1f} digits (regular at >= 5)" in row
 
 
-def test_cli_report_shows_the_band_corrected_k():
-    """The report's 0-1 row gives the band-corrected K beside the plain one (rule 6)."""
-    from chaospound.cli.classify import _classify_report
-
-    evidence = {"tol": 1e-5, "best_period": 2, "rtol": 1e-8, "atol": 1e-10, "model": "towers",
-                "window_cycles": 64, "zero_one_bands": 2, "zero_one_banded": 0.997}
-    regime = Regime("chaotic", strobe_mismatch=0.13, max_exponent=0.035,
-                    max_exponent_error=0.003, zero_one=0.093, confidence=0.9,
-                    evidence=evidence)
-    [row] = [line for line in _classify_report(load_preset("fig4"), regime, None).splitlines()
-             if "0-1 test K" in line]
-    assert "0.093; 0.997 less the means of 2 bands" in row
-
-
 @pytest.mark.parametrize(("period_ratio", "label"), [(0.7, "periodic 1-1"), (1.3, "periodic 1-2")])
 def test_translational_pounding_is_not_group_periodic(period_ratio, label):
     """The pair model (no torsion): periodic face impacts, not groups (the paper, 3.2)."""
@@ -545,16 +531,24 @@ def test_cli_classify_bad_input_is_one_line_exit_2(capsys, options):
     assert len(err.splitlines()) == 1 and err.startswith("chaospound: error: ")
 
 
-def test_cli_report_says_when_the_zero_one_record_was_extended():
-    """A 0-1 test that vetoed a positive exponent over 1001 sections is rerun over 4001
-    (rule 6); the report gives both Ks and the record's length."""
+
+@pytest.mark.parametrize(("extra", "zero_one", "expected"), [
+    ({"zero_one_bands": 2, "zero_one_banded": 0.997}, 0.093,
+     "0.093; 0.997 less the means of 2 bands"),
+    ({"sections": 4001, "zero_one_vetoed": 0.149}, 0.363,
+     "0.363 (over 4001 sections; 0.149 over the first 1001"),
+])
+def test_cli_report_gives_the_zero_one_tests_of_rule_6(extra, zero_one, expected):
+    """The report's 0-1 row gives the band-corrected K beside the plain one, and, where
+    a 0-1 test that vetoed a positive exponent over 1001 sections was rerun over 4001,
+    both Ks and the record's length (rule 6)."""
     from chaospound.cli.classify import _classify_report
 
-    evidence = {"tol": 1e-5, "best_period": 4, "rtol": 1e-8, "atol": 1e-10, "model": "towers",
-                "window_cycles": 64, "sections": 4001, "zero_one_vetoed": 0.149}
-    regime = Regime("chaotic", strobe_mismatch=0.21, max_exponent=0.005,
-                    max_exponent_error=0.001, zero_one=0.363, confidence=0.3,
+    evidence = {"tol": 1e-5, "best_period": 2, "rtol": 1e-8, "atol": 1e-10, "model": "towers",
+                "window_cycles": 64, **extra}
+    regime = Regime("chaotic", strobe_mismatch=0.13, max_exponent=0.035,
+                    max_exponent_error=0.003, zero_one=zero_one, confidence=0.9,
                     evidence=evidence)
     [row] = [line for line in _classify_report(load_preset("fig4"), regime, None).splitlines()
              if "0-1 test K" in line]
-    assert "0.363 (over 4001 sections; 0.149 over the first 1001" in row
+    assert expected in row
