@@ -213,6 +213,29 @@ def test_zero_one_is_reproducible_and_accepts_explicit_c():
         zero_one_test(x[:10])
 
 
+def test_zero_one_is_the_same_whatever_ran_before():
+    """The tables of exp(i c j) kept between tests (by record length and c) give the
+    value of a first call, after calls on other lengths and c that fill and clear them,
+    and equal the direct sums of the test's definition."""
+    x = logistic(1000)
+    first = zero_one_test(x)
+    for n in (300, 700, 999, 1000, 1001, 40):
+        zero_one_test(logistic(n), seed=n)
+        zero_one_test(logistic(n), c_values=[1.1, 2.0])
+    assert zero_one_test(x) == first
+    c = np.random.default_rng(0).uniform(np.pi / 5, 4 * np.pi / 5, size=100)
+    assert zero_one_test(x, c_values=c) == first
+    j = np.arange(1, 1001)
+    lags = np.arange(1, 101)
+    ks = []
+    for ci in c:  # the definition, sum by sum
+        z = np.cumsum(x * np.exp(1j * ci * j))
+        m = np.array([np.mean(np.abs(z[n:] - z[:-n]) ** 2) for n in lags])
+        d = m - x.mean() ** 2 * (1 - np.cos(lags * ci)) / (1 - np.cos(ci))
+        ks.append(np.corrcoef(lags, d)[0, 1])
+    assert first == pytest.approx(np.median(ks), abs=1e-9)
+
+
 def banded_logistic(n, r=3.575):
     """The logistic map past the period-doubling cascade: chaos in four bands visited in
     turn (largest exponent about +0.09 per step), 2000 steps of transient dropped."""
