@@ -56,7 +56,8 @@ The rules, in the order :func:`classify` applies them (the same text is in
    ``lyapunov_cycles`` cycles from the last section, 20 cycles of tangent
    alignment, error of 10 block means). Chaotic when lambda > 3 sigma
    (docs/model.md 12's rule) and K >= 0.2 (K < 0.2 clearly contradicts, unless
-   the band-corrected K is >= 0.2);
+   the band-corrected K is >= 0.2; a contradiction stands only over 4000
+   sections, :func:`vetoed`: weak chaos's K rises only over many Lyapunov times);
    quasi-periodic when |lambda| <= 3 sigma and the record is regular by the
    0-1 test (K < 0.2) or by the weighted Birkhoff average (at least 5
    digits, :func:`birkhoff_digits`: on a torus the average converges faster
@@ -824,7 +825,7 @@ def _phases(c: np.ndarray, n_total: int) -> np.ndarray:
     Every 0-1 test of a classification draws the same c (the same seed) over records
     of one or two lengths, and the plain and band-corrected tests share them: the
     table is kept (a few, 1.6 MB for 100 c and 1001 values) instead of recomputed,
-    a third of the test's time.
+    half of the test's time.
     """
     key = (n_total, c.tobytes())
     table = _PHASES.get(key)
