@@ -403,14 +403,9 @@ def classify(
         report(f"no period: {ZERO_ONE_CYCLES} cycles for the 0-1 test")
         more = simulate(scene, transient=0, record=ZERO_ONE_CYCLES + 1 - states.shape[0],
                         initial_state=last, start_at_section=True)
-        states, last = np.concatenate([states, more.strobe.state[1:]]), more.strobe.state[-1]
-        extra = more.impacts
-        cycles = np.concatenate([cycles, extra.cycle + window])
-        local_phase = np.concatenate(
-            [local_phase, _phase_from_section(extra.time, extra.cycle, more.period,
-                                              section_phase)])
-        velocity = np.concatenate([velocity, extra.velocity])
-        labels = labels + extra.labels
+        states, cycles, local_phase, velocity, labels = _appended(
+            (states, cycles, local_phase, velocity, labels), more, section_phase)
+        last = states[-1]
     report(f"no period: largest Lyapunov exponent over {lyapunov_cycles} cycles")
     spectrum = lyapunov_spectrum(scene, k=1, transient=0,
                                  cycles=lyapunov_cycles, initial_state=last)
@@ -434,14 +429,9 @@ def classify(
                "test (it vetoes a positive exponent)")
         more = simulate(scene, transient=0, record=(LONGER_RUN - 1) * ZERO_ONE_CYCLES,
                         initial_state=last, start_at_section=True)
-        extra = more.impacts
-        cycles = np.concatenate([cycles, extra.cycle + states.shape[0] - 1])
-        local_phase = np.concatenate(
-            [local_phase, _phase_from_section(extra.time, extra.cycle, more.period,
-                                              section_phase)])
-        velocity = np.concatenate([velocity, extra.velocity])
-        labels = labels + extra.labels
-        states, last = np.concatenate([states, more.strobe.state[1:]]), more.strobe.state[-1]
+        states, cycles, local_phase, velocity, labels = _appended(
+            (states, cycles, local_phase, velocity, labels), more, section_phase)
+        last = states[-1]
         evidence["zero_one_vetoed"] = regime.zero_one
         regime = classify_sequence(
             states * weights, cycles, local_phase, velocity, labels,
@@ -472,6 +462,30 @@ def classify(
         if note:
             evidence["approach"] = note
     return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
+
+
+def _appended(record: tuple, more, section_phase: float) -> tuple:
+    """A record ``(states, cycles, phases, velocities, labels)`` followed by the run
+    ``more`` from its last section (its impacts' cycles counted on)."""
+    states, cycles, phases, velocity, labels = record
+    extra = more.impacts
+    return (np.concatenate([states, more.strobe.state[1:]]),
+            np.concatenate([cycles, extra.cycle + states.shape[0] - 1]),
+            np.concatenate([phases, _phase_from_section(extra.time, extra.cycle,
+                                                        more.period, section_phase)]),
+            np.concatenate([velocity, extra.velocity]),
+            labels + extra.labels)
+
+
+def with_exponent(regime: Regime, exponent: float, error: float) -> Regime:
+    """Rule 6 again on a reading without a period (:func:`classify_sequence` with an
+    exponent), with another exponent: the same record's period search, 0-1 tests and
+    Birkhoff average, which do not depend on it, are not computed twice."""
+    evidence = dict(regime.evidence)
+    label, confidence = _aperiodic_regime(exponent, error, regime.zero_one, evidence)
+    return replace(regime, regime=label, confidence=confidence,
+                   max_exponent=float(exponent), max_exponent_error=float(error),
+                   evidence=evidence)
 
 
 def _orbit_system(scene: System) -> System:

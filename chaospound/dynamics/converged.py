@@ -108,6 +108,7 @@ from .classify import (
     length_weights,
     newton_orbit,
     vetoed,
+    with_exponent,
 )
 from .system import System, advance, as_system, evolve
 
@@ -488,14 +489,14 @@ class _Classifier:
             # few for its 0-1 test), so the exponent goes on from the record's end for up
             # to LONGER_RUN times as long in all, as classify's rerun does, and decides anew
             lam, err = self._longer_exponent(record, blocks, leaning)
-            regime = self._read_record(record, lam, err)
+            regime = with_exponent(regime, lam, err)
         if vetoed(regime):
             # a positive exponent that the 0-1 test calls regular: LONGER_RUN times the
             # sections before the veto stands, as classify does (weak chaos's K rises
             # only over many Lyapunov times)
             more = self._zero_one_record(record.strobe.state[-1],
                                          (LONGER_RUN - 1) * ZERO_ONE_CYCLES)
-            record = _joined(record, more)
+            record = _joined(record.strobe.state, record.strobe.time[0], record.stats, more)
             self.evidence["zero_one_vetoed"] = regime.zero_one
             regime = self._read_record(record, lam, err)
         if regime.regime == "unresolved":
@@ -522,7 +523,7 @@ class _Classifier:
         where the label may need them: none in those cycles (rule 5 would read
         ``none``), or a period within tol over the sections (rule 4's group check
         reads the impacts of the whole window)."""
-        from ..simulate import RunStats, Strobe, run_stats, simulate
+        from ..simulate import run_stats, simulate
 
         window = min(max(self.record, 2), cycles)
         offset = cycles - window
@@ -535,14 +536,7 @@ class _Classifier:
                 or _best_mismatch(scaled, _scale(scaled), self.max_period) < self.tol):
             return simulate(self.flow, transient=0, record=cycles,
                             initial_state=state, start_at_section=True)
-        period = self.flow.period
-        imp = record.impacts
-        impacts = replace(imp, time=imp.time + offset * period, cycle=imp.cycle + offset)
-        k = np.arange(cycles + 1)
-        strobe = Strobe(cycle=k, time=head.section_times[0] + k * period, state=states)
-        stats = RunStats(*(a + b for a, b in zip(astuple(run_stats(head)),
-                                                 astuple(record.stats), strict=True)))
-        return replace(record, impacts=impacts, strobe=strobe, stats=stats, record=cycles)
+        return _joined(head.sections, head.section_times[0], run_stats(head), record)
 
     def _read_record(self, record, lam: float, err: float) -> Regime:
         """Rule 6 on a record of sections and impacts, with the exponent and the 0-1 test."""
@@ -612,19 +606,19 @@ def _exponent_system(target: System, rtol: float) -> System:
     return _with_solver(target, {"rtol": EXPONENT_RTOL, "atol": ATOL_PER_RTOL * EXPONENT_RTOL})
 
 
-def _joined(first, second):
-    """One record: ``first``, then ``second`` (run from first's last section): the
-    sections of both, the impacts of ``second`` (the last cycles' impacts, as a 0-1
-    record keeps), the work of both."""
+def _joined(sections: np.ndarray, time0: float, stats, second):
+    """One record: the sections ``sections`` (the first at time ``time0``, the work
+    ``stats``), then the record ``second`` run from the last of them: the sections of
+    both, the impacts of ``second`` only (a 0-1 record's last cycles), the work of both."""
     from ..simulate import RunStats, Strobe
 
-    offset, period = first.record, second.period
+    offset, period = sections.shape[0] - 1, second.period
     imp = second.impacts
     impacts = replace(imp, time=imp.time + offset * period, cycle=imp.cycle + offset)
     k = np.arange(offset + second.record + 1)
-    states = np.concatenate([first.strobe.state, second.strobe.state[1:]])
-    strobe = Strobe(cycle=k, time=first.strobe.time[0] + k * period, state=states)
-    stats = RunStats(*(a + b for a, b in zip(astuple(first.stats), astuple(second.stats),
+    strobe = Strobe(cycle=k, time=time0 + k * period,
+                    state=np.concatenate([sections, second.strobe.state[1:]]))
+    stats = RunStats(*(a + b for a, b in zip(astuple(stats), astuple(second.stats),
                                              strict=True)))
     return replace(second, impacts=impacts, strobe=strobe, stats=stats,
                    record=offset + second.record)
