@@ -471,7 +471,7 @@ def system_metadata(system: System, spec: SweepSpec) -> dict:
 @dataclass
 class _Task:
     branch: str
-    key: tuple[int, int]  # (chain, segment): the branch's flush order
+    key: tuple[int, int]  # (chain, segment)
     indices: np.ndarray  # grid indices, in visiting order
     start_state: np.ndarray | None
     continuation: bool
@@ -479,7 +479,7 @@ class _Task:
 
 
 class _Plan:
-    """Which points remain, cut into tasks, and the order results are written in.
+    """Which points remain, cut into tasks, and the keys of those tasks per branch.
 
     Bookkeeping is a few bytes per point (index arrays): the tasks of the
     "fresh" branch are cut lazily, continuation chains are rows of the
@@ -490,7 +490,7 @@ class _Plan:
                  chunk: int) -> None:
         self.spec = spec
         self.chunk = chunk
-        self.flush_order: dict[str, Sequence[tuple[int, int]]] = {}
+        self.task_keys: dict[str, Sequence[tuple[int, int]]] = {}
         self.remaining: dict[tuple[str, int], np.ndarray] = {}
         self.total = 0
         self._chain_starts: list[_Task] = []
@@ -500,7 +500,7 @@ class _Plan:
             if branch == "fresh":
                 self._fresh_todo = order[pending[order]]
                 n_tasks = math.ceil(self._fresh_todo.size / chunk)
-                self.flush_order[branch] = _FreshKeys(n_tasks)
+                self.task_keys[branch] = _FreshKeys(n_tasks)
                 self.total += int(self._fresh_todo.size)
                 continue
             keys: list[tuple[int, int]] = []
@@ -515,13 +515,13 @@ class _Plan:
                 self.remaining[(branch, c)] = todo
                 self.total += int(todo.size)
                 self._chain_starts.append(self._segment(branch, c, 0, state))
-            self.flush_order[branch] = keys
+            self.task_keys[branch] = keys
 
     def tasks(self) -> Iterator[_Task]:
         """The first task of every chain, then the fresh points' tasks, cut as needed."""
         yield from self._chain_starts
         todo, chunk = self._fresh_todo, self.chunk
-        for k in range(len(self.flush_order.get("fresh", ()))):
+        for k in range(len(self.task_keys.get("fresh", ()))):
             yield _Task("fresh", (k, 0), todo[k * chunk:(k + 1) * chunk], None, False, True)
 
     def _segment(self, branch, chain, seg, state) -> _Task:
@@ -540,7 +540,7 @@ class _Plan:
 
 
 class _FreshKeys(Sequence):
-    """Flush order of the fresh branch's tasks, (0, 0), (1, 0), ..., without a list."""
+    """Keys of the fresh branch's tasks, (0, 0), (1, 0), ..., without a list."""
 
     def __init__(self, n: int) -> None:
         self.n = n
@@ -561,9 +561,11 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
     messages: list[str] = []
     failed = 0
     done = 0
-    buffers: dict[str, dict] = {b: {} for b in plan.flush_order}  # arrived out of order
-    cursor = dict.fromkeys(plan.flush_order, 0)
-    staged: dict[str, list[PointResult]] = {b: [] for b in plan.flush_order}  # in order
+    # finished points wait here for the next commit, in the order they arrive: the store
+    # keys every point by its grid index (so the file does not depend on that order),
+    # and a continuation chain's segments arrive in the chain's order, so what is
+    # committed of a chain is always its first points (what --resume continues from)
+    staged: dict[str, list[PointResult]] = {b: [] for b in plan.task_keys}
     committed = 0
     last_commit = time.monotonic()
     writing = False
@@ -607,8 +609,8 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
                 nxt = plan.follow_up(task, results)
                 if nxt is not None:
                     follow_ups.appendleft(nxt)
+                staged[task.branch] += results
                 ctrl_c.check()
-                buffers[task.branch][task.key] = results
                 for r in results:
                     regimes[r.regime] = regimes.get(r.regime, 0) + 1
                     if r.status == 2:
@@ -619,11 +621,6 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
                 if bar is not None:
                     bar.update(len(results))
                     bar.set_postfix_str(_postfix(regimes, failed), refresh=False)
-            for branch in buffers:
-                order = plan.flush_order[branch]
-                while cursor[branch] < len(order) and order[cursor[branch]] in buffers[branch]:
-                    staged[branch] += buffers[branch].pop(order[cursor[branch]])
-                    cursor[branch] += 1
             if (time.monotonic() - last_commit >= COMMIT_INTERVAL
                     or sum(map(len, staged.values())) >= COMMIT_POINTS):
                 commit()

@@ -45,6 +45,7 @@ from chaospound.scene import Scene, load_preset
 from chaospound.store import REGIMES, SweepStoreError, open_sweep, sweep_progress
 from chaospound.sweep import (
     CONTINUATIONS,
+    SweepInterrupted,
     SweepSpec,
     axes_from_scene,
     parse_axis,
@@ -383,6 +384,46 @@ def test_resume_after_sigkill_equals_an_uninterrupted_run(tmp_path, references):
     assert main(["sweep", "--preset", "wall", *SHORT, "--param", f"period_ratio=0.3:2.0#{n}",
                  "-o", str(path), "--quiet", "--resume"]) == 0
     assert_same_store(path, reference)
+
+
+@pytest.mark.parametrize("continuation", ["none", "forward"])
+def test_points_finished_out_of_order_are_committed_at_a_ctrl_c(tmp_path, monkeypatch,
+                                                                continuation):
+    """Workers finish tasks in any order. Every finished point is committed when a
+    Ctrl-C stops the sweep, not only those that follow the grid's order without a gap
+    (the points behind a gap used to be dropped: the message said 160 of 1000 while
+    the progress bar had shown 192). Here the backend hands back the newest task first
+    and Ctrl-C comes at the sixth: five tasks are done, grid order has none of them first."""
+    from chaospound import sweep as sweep_module
+
+    grid = ("gap=4,5", "period_ratio=0.5:1.0#6") if continuation != "none" else (
+        "period_ratio=0.5:1.0#12",)
+    spec = spec_of(WALL, *grid, continuation=continuation)
+    straight = tmp_path / "straight.h5"
+    run_sweep(WALL, spec, straight, progress=False, chunk=1)
+    calls = []
+    result = sweep_module._LocalBackend.result
+
+    def newest_first(self, futures):
+        return futures[-1:]
+
+    def interrupted(self, fut):
+        calls.append(1)
+        if len(calls) == 6:
+            raise KeyboardInterrupt
+        return result(self, fut)
+
+    path = tmp_path / "resumed.h5"
+    with monkeypatch.context() as m:
+        m.setattr(sweep_module._LocalBackend, "wait_some", newest_first)
+        m.setattr(sweep_module._LocalBackend, "result", interrupted)
+        with pytest.raises(SweepInterrupted) as stopped:
+            run_sweep(WALL, spec, path, progress=False, chunk=1)
+    assert stopped.value.done == 5
+    assert sum(s == "done" for s in open_sweep(path).status()) == 5
+    summary = run_sweep(WALL, spec, path, resume=True, progress=False, chunk=1)
+    assert summary.computed == 12 - 5
+    assert_same_store(path, straight)
 
 
 @pytest.mark.parametrize("workers", ["1", "2"])
