@@ -190,6 +190,11 @@ class _Spec:
         if self.kind == "path":
             return "must be a file path"
         if self.low is not None and self.high is not None:
+            if self.kind == "int":  # the integers of [low, high), listed
+                values = [f"{v:g}" for v in range(math.ceil(self.low), math.ceil(self.high))]
+                return "must be " + (", ".join(values[:-1]) + " or " + values[-1]
+                                     if 1 < len(values) <= 4 else
+                                     f"an integer in [{self.low:g}, {self.high:g})")
             return f"must be in [{self.low:g}, {self.high:g})"
         if self.low is not None:
             op = ">" if self.low_open else ">="
@@ -488,6 +493,9 @@ def _as_choice(name: str, value: object, spec: _Spec) -> str:
     raise _bad(name, value, spec)
 
 
+KNOWN_LISTED_CHARS = 300  #: an unknown name's error lists the known ones up to this length
+
+
 def _unknown(
     name: str, known: Iterable[str] | None = None, what: str = "parameter", listing: bool = False
 ) -> SceneError:
@@ -499,10 +507,11 @@ def _unknown(
     close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
     hints = ["did you mean " + " or ".join(repr(c) for c in close) + "?"] if close else []
     if listing or not close:
-        shown = [n for n in known if n not in STOCHASTIC_FIELDS]
-        if len(shown) < len(known):  # 15 names: the line would pass 1000 characters
-            shown.append("the stochastic motion's ground_* ('chaospound params')")
-        hints.append("known: " + ", ".join(shown))
+        listed = ", ".join(known)
+        if listing or len(listed) <= KNOWN_LISTED_CHARS:
+            hints.append("known: " + listed)
+        else:  # every scene parameter: a line of 1000 characters nobody reads
+            hints.append("'chaospound params' lists them all")
     return SceneError(f"unknown {what} {shorten(name, quote=True)} ({'; '.join(hints)})")
 
 

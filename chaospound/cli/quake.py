@@ -181,19 +181,10 @@ def _report(run, units, args: argparse.Namespace) -> str:
     from chaospound.units import conversion_rows, si_value, units_of
 
     scene, sim = run.scene, run.simulation
-    ex = scene.excitation
-    if ex.ground == "record":
-        motion = f"record {ex.ground_file}, scale {ex.ground_scale:g}"
-    else:
-        amplitude = (f"PGA {ex.ground_pga:g} g" if ex.ground_pga is not None
-                     else f"S0 {ex.ground_intensity:g} m^2/s^3")
-        motion = (f"stochastic (Kanai-Tajimi-Clough-Penzien, {ex.ground_envelope} envelope), "
-                  f"seed {ex.ground_seed}, {amplitude}, scale {ex.ground_scale:g}")
     base = units_of(scene)
     end = (f"{base.time * run.motion_end:.6g} s" if base is not None
            else f"t = {run.motion_end:.6g}")
     header = [*_scene_rows(scene, f"{sim.model} ({len(sim.state_names)} states)", sim.period),
-              ("ground motion", motion),
               ("duration", f"motion ends at {end}; run covers {sim.record} section intervals "
                            f"(t = {run.time:.6g})"),
               ("solver", _solver_text(scene.solver))]

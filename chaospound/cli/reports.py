@@ -46,7 +46,32 @@ def _scene_rows(scene, model: str, period: float) -> list[tuple[str, str]]:
     if ex.ground == "sine" and ex.ground_y_ratio != 0.0:  # the bi-directional sine
         rows.append(("ground y", f"u_gy = {ex.ground_y_ratio:g} sin(t/r + "
                                  f"{ex.ground_y_phase:g})"))
+    elif ex.ground != "sine":
+        rows.append(("ground motion", _motion_text(ex)))
+    rows.append(("contact", _contact_text(scene.contact)))
     return rows
+
+
+def _motion_text(ex) -> str:
+    """A ground motion other than the sine, in one line (a record's file and scale, a
+    stochastic motion's process, seed and amplitude)."""
+    if ex.ground == "record":
+        return f"record {ex.ground_file}, scale {ex.ground_scale:g}"
+    if ex.ground == "stochastic":
+        amplitude = (f"PGA {ex.ground_pga:g} g" if ex.ground_pga is not None
+                     else f"S0 {ex.ground_intensity:g} m^2/s^3")
+        return (f"stochastic (Kanai-Tajimi-Clough-Penzien, {ex.ground_envelope} envelope), "
+                f"seed {ex.ground_seed}, {amplitude}, scale {ex.ground_scale:g}")
+    return ex.ground
+
+
+def _contact_text(contact) -> str:
+    """The contact law: its name, and for a dissipative law its coefficient of restitution."""
+    law = contact.contact_law
+    text = f"{law}, beta {contact.beta:g}, chi {contact.chi:g}"
+    if law != "hertz":
+        text += f", restitution {contact.restitution:g}"
+    return text + (", no pull" if contact.no_pull else "")
 
 
 def _emit_report(blocks: list[str], tail: list[tuple[str, str]], plot: str | None) -> int:

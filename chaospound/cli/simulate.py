@@ -194,7 +194,7 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
                 f"{imp.velocity[i]:.6g}",
                 label,
                 f"{imp.peak_penetration[i]:.4g}",
-                f"{imp.peak_force[i]:.4g}",
+                f"{imp.peak_force[i]:.4g}" if system is None else "-",  # no contact law
                 f"{imp.duration[i]:.4g}",
             )
             for i, label in enumerate(imp.labels)
@@ -220,7 +220,8 @@ def _summary(sim: Simulation, samples_per_cycle: int, output: str | None) -> lis
         ("impacts per cycle", f"{len(imp) / sim.record:.4g} ({len(imp)} in {sim.record} cycles)"),
         (
             "velocity",
-            f"min {imp.velocity.min():.6g}, max {imp.velocity.max():.6g} (A_g omega_Ax)"
+            f"min {imp.velocity.min():.6g}, max {imp.velocity.max():.6g}"
+            + (" (A_g omega_Ax)" if sim.scene is not None else "")  # a system's own units
             if len(imp) else "-",
         ),
         (f"corners, cycle {last_cycle}", " ".join(last) if last else "none"),
