@@ -653,7 +653,7 @@ def plot_bifurcation(
                 vs.append(v)
         x, v = np.concatenate(xs), np.concatenate(vs)
         if x.size == 0:
-            continue  # e.g. "none": no impact to draw, no legend entry
+            continue  # e.g. "none": no impact to draw (its rug below)
         top.scatter(
             x,
             v,
@@ -663,12 +663,19 @@ def plot_bifurcation(
             color=colors[category],
             label=None if regimes is None else category,
         )
+    silent = values[[np.asarray(v).size == 0 for v in impact_velocities_per_point]]
+    if silent.size:  # points without an impact: a rug on the axis, so none goes unseen
+        top.plot(silent, np.full(silent.size, 0.02), ls="none", marker="|", ms=8, mew=1,
+                 color=colors.get("none", "0.5"), transform=top.get_xaxis_transform(),
+                 label=f"no impact ({silent.size} points)")
+    _full_range(top, values)
     top.set_ylabel(VELOCITY_LABEL)
     top.set_xlabel(parameter_label)
-    if regimes is not None:
+    if regimes is not None or silent.size:
         top.legend(fontsize="small", markerscale=3, frameon=False)
     if lam is not None:
         bottom = axes[1]
+        _full_range(bottom, values)
         point_colors = [colors[c] for c in categories]
         finite = np.isfinite(lam)
         bottom.plot(values[finite], lam[finite], color="0.6", lw=0.6)
@@ -685,6 +692,14 @@ def plot_bifurcation(
         bottom.set_xlabel(parameter_label)
         top.set_xlabel("")
     return fig
+
+
+def _full_range(ax: Axes, values: np.ndarray) -> None:
+    """The x axis spans every swept value (the points without impacts too), with a 2 % margin."""
+    finite = values[np.isfinite(values)]
+    if finite.size and finite.max() > finite.min():
+        pad = 0.02 * (finite.max() - finite.min())
+        ax.set_xlim(finite.min() - pad, finite.max() + pad)
 
 
 # ============================================================= hysteresis
@@ -918,6 +933,7 @@ def plot_orbit_diagram(
         ax.legend(handles=[Line2D([], [], ls="none", marker="o", ms=4, color=colors[c],
                                   label=c) for c in present],
                   fontsize="small", frameon=False)
+    _full_range(ax, values)
     ax.set_xlabel(parameter_label)
     ax.set_ylabel(state_label)
     return fig
