@@ -888,8 +888,35 @@ def _check_same_sweep(stored: dict, path, meta) -> None:
         same = False
     if not same:
         raise SweepStoreError(
-            f"{path}: holds a different sweep or scene; resume needs the same definition "
-            "(use --overwrite to start again)")
+            f"{path}: holds a different sweep or scene ({_what_differs(stored, meta)}); resume "
+            "needs the same definition (use --overwrite to start again)")
+
+
+def _what_differs(stored: dict, meta: dict) -> str:
+    """The first setting that differs between the stored and the new definition, as
+    ``name: <in the file> in the file, <now> now`` (the scene's TOML tables and keys,
+    then the sweep's axes and options)."""
+    from .scene import tomllib  # tomli before Python 3.11
+
+    def flat(value, prefix=""):
+        if isinstance(value, dict):
+            out = {}
+            for key, item in value.items():
+                out.update(flat(item, f"{prefix}{key}."))
+            return out
+        return {prefix.rstrip("."): value}
+
+    for field, parse in (("scene", tomllib.loads), ("sweep", json.loads)):
+        try:
+            was, now = flat(parse(stored[field])), flat(parse(meta[field]))
+        except (KeyError, TypeError, ValueError):
+            continue
+        for key in dict.fromkeys([*now, *was]):
+            if was.get(key) != now.get(key):
+                name = key if field == "scene" else f"sweep {key}"
+                return (f"{name}: {shorten(json.dumps(was.get(key)), 40)} in the file, "
+                        f"{shorten(json.dumps(now.get(key)), 40)} now")
+    return "its definition"
 
 
 def _check_same_system(stored: dict, path, meta) -> None:

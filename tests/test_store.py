@@ -303,9 +303,10 @@ def test_foreign_files_are_refused_and_left_alone(tmp_path):
         with pytest.raises(SweepStoreError, match=match):
             run_sweep(WALL, spec, path, progress=False, **options)
         assert (path.read_bytes(), os.stat(path).st_mtime_ns) == before
-    # a different scene is a different sweep too
+    # a different scene is a different sweep too, and the message names what differs
     changed = dataclasses.replace(WALL, name="renamed")
-    with pytest.raises(SweepStoreError, match="different sweep or scene"):
+    with pytest.raises(SweepStoreError, match=r'different sweep or scene \(name: "wall" in '
+                                              r'the file, "renamed" now\)'):
         run_sweep(changed, sweep_of(changed, "period_ratio=0.6:1.2#4"), different, resume=True,
                   progress=False)
 
