@@ -47,3 +47,21 @@ def test_the_example_oscillator_is_the_documented_one():
     assert dict(system.parameter_values) == {"c": 0.06, "gap": 1.0, "beta": 1000.0, "r": 0.7}
     assert system.state_names == ("x", "dx") and system.has_gap
     assert classify(system).label == "periodic 1-1"  # as docs/custom_systems.md says
+
+
+def test_a_record_run_says_what_part_of_the_motion_it_spans(capsys):
+    """The README's record command covers the 20 s record; the preset's default 40 + 8
+    cycles of T = 0.35 s stop at 16.8 s, and the report says so and how to cover it."""
+    from chaospound.cli import main
+
+    base = ["simulate", "--preset", "fig3a", "--set", "ground=record", "--set",
+            f"ground_file={EXAMPLES / 'synthetic.AT2'}", "--set", "length_unit=0.01",
+            "--set", "tower_period=0.5"]
+    assert main(base) == 0
+    out = capsys.readouterr().out
+    assert f"record {EXAMPLES / 'synthetic.AT2'}" in out and "contact        hertz" in out
+    assert "motion ends at t = 251.327 (20 s); the run spans t = 0 to 211.115 (16.8 s): " \
+           "its last part is not run (--set record=18 covers it)" in out
+    assert main([*base, "--set", "transient=0", "--set", "record=58"]) == 0
+    out = capsys.readouterr().out
+    assert "the run spans t = 0 to 255.097 (20.3 s)\n" in out

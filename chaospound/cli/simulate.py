@@ -182,6 +182,7 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
                                 f"{' '.join(sim.state_names)})", sim.period),
             ("cycles", f"{sim.transient} transient + {sim.record} recorded, "
                        f"section phase {scene.run.phase:g}"),
+            *_motion_span(sim),
             ("solver", _solver_text(scene.solver)),
         ]  # fmt: skip
     blocks = [_table(None, header, "ll")]
@@ -209,6 +210,29 @@ def _simulation_report(sim: Simulation, samples_per_cycle: int, output: str | No
         summary.append(("wrote", f"{plot} ({drawn})"))
     blocks.append(_table(None, summary, "ll"))
     return "\n\n".join(blocks) + "\n"
+
+
+def _motion_span(sim: Simulation) -> list[tuple[str, str]]:
+    """For a record or a stochastic motion: where the motion ends and what the run spans
+    (a run shorter than the motion leaves its end out; one longer, free vibration)."""
+    from chaospound.quake import motion_end
+    from chaospound.units import units_of
+
+    scene = sim.scene
+    if scene.excitation.ground not in ("record", "stochastic"):
+        return []
+    end = motion_end(scene.excitation.ground_block())
+    span = (sim.transient + sim.record) * sim.period
+    base = units_of(scene)
+
+    def when(t: float) -> str:
+        return f"t = {t:.6g}" + (f" ({base.time * t:.4g} s)" if base is not None else "")
+
+    text = f"motion ends at {when(end)}; the run spans t = 0 to {when(span)[4:]}"
+    if span < end:
+        more = math.ceil(end / sim.period - 1e-9) - sim.transient
+        text += f": its last part is not run (--set record={more} covers it)"
+    return [("duration", text)]
 
 
 def _summary(sim: Simulation, samples_per_cycle: int, output: str | None) -> list[tuple[str, str]]:
