@@ -27,8 +27,10 @@ from chaospound.dynamics.classify import (
     length_weights,
 )
 from chaospound.dynamics.converged import (
+    CHAOS_WATCH,
     EXPONENT_RTOL,
     MIN_WINDOW,
+    WATCH_CHUNK,
     ZERO_ONE_CYCLES,
     _exponent_system,
     _mean_and_error,
@@ -74,7 +76,27 @@ def test_fig4_at_0_9_is_chaotic_by_more_than_three_sigma():
     assert regime.max_exponent > 3 * regime.max_exponent_error > 0
     assert regime.period_cycles is None
     assert regime.evidence["decided_by"] == "exponent"
-    assert regime.transient_used < 500  # far below the careful classifier's 2000 cycles
+    # a chaotic reading must last CHAOS_WATCH cycles (far below the careful classifier's
+    # 2000): the watch's last run ends there
+    assert CHAOS_WATCH <= regime.transient_used < CHAOS_WATCH + WATCH_CHUNK
+
+
+@pytest.mark.parametrize(("period_ratio", "label"), [(1.207007007007007, "group-periodic 7-2"),
+                                                     (1.1695695695695696, "group-periodic 32-10")])
+def test_a_chaotic_transient_is_the_orbit_it_settles_on(period_ratio, label):
+    """fig4 at these T/T_Ax reads chaotic for a few hundred cycles (its exponent clears
+    4 sigma within 300), then settles on a stable group-periodic orbit (after 440 and
+    560 cycles from rest: the careful classifier's transients). Watching the sections
+    until CHAOS_WATCH cycles finds the orbit, which Newton confirms with its multipliers;
+    without the watch the point was labelled chaotic."""
+    scene = FIG4.with_params(period_ratio=period_ratio)
+    regime = classify_converged(scene).regime
+    assert regime.label == label
+    assert regime.evidence["confirmed_by"] == "newton"
+    assert regime.evidence["max_multiplier"] < 1.0
+    assert regime.evidence["exponent_stages"][0]["decision"].startswith("chaotic transient")
+    assert regime.transient_used < CHAOS_WATCH
+    assert classify(scene).label == label  # the careful classifier, its own 6000 cycles
 
 
 def exponent_blocks(system, state, cycles: int, block: int = 10) -> np.ndarray:
