@@ -49,7 +49,7 @@ confidences of ``docs/classification.md``), doing less work per point:
    lambda above it: chaotic (the 0-1 test is not needed;
    confidence as classify's exponent part), once the point has run
    ``CHAOS_WATCH`` cycles in all: until then the sections go on at
-   ``EXPONENT_RTOL``, ``WATCH_CHUNK`` cycles at a time, each run's tail
+   ``WATCH_RTOL``, ``WATCH_CHUNK`` cycles at a time, each run's tail
    tested as in step 2, and a chaotic transient that settles on a stable orbit
    is that orbit, confirmed by step 3 (fig4's scan: 23 of 277 points read
    chaotic after some 100-300 cycles settle on group-periodic orbits before
@@ -137,6 +137,9 @@ EXPONENT_CAP = 300  #: cycles of exponent at most per stage
 #: transient that ends on a stable orbit within them is that orbit (fig4: 23 of 277)
 CHAOS_WATCH = 1000
 WATCH_CHUNK = 50  #: cycles per run of the sections while watching
+#: their rtol: the watch asks only whether a period comes within NEWTON_TRY (1e-2) for
+#: Newton to start from (it then runs at the classification's rtol)
+WATCH_RTOL = 1e-5
 ZERO_ONE_CYCLES = 1000  #: sections recorded for the 0-1 test (as classify)
 #: rtol of the exponent's and the 0-1 test's runs (atol ATOL_PER_RTOL times it): their
 #: statistics, not a mismatch at tol, decide, and they cost half as much as at 1e-8
@@ -239,6 +242,9 @@ class _Classifier:
         self.record = record
         self.target, self.rtol, self.atol = _classification_system(system)
         self.flow = _exponent_system(self.target, self.rtol)
+        self.watch = (self.flow if self.flow.method == "rk4" or self.flow.rtol >= WATCH_RTOL
+                      else _with_solver(self.target, {"rtol": WATCH_RTOL,
+                                                      "atol": ATOL_PER_RTOL * WATCH_RTOL}))
         self.tol = TOL_PER_RTOL * self.rtol if tol is None else float(tol)
         if not (math.isfinite(self.tol) and self.tol > 0.0):
             raise ValueError(f"tol = {tol}: must be a finite number > 0")
@@ -456,13 +462,13 @@ class _Classifier:
         return augmented, lam, err, z, None
 
     def _watch_chaos(self) -> ConvergedResult | None:
-        """Run the sections on, ``WATCH_CHUNK`` cycles at a time at ``EXPONENT_RTOL``, until
+        """Run the sections on, ``WATCH_CHUNK`` cycles at a time at ``WATCH_RTOL``, until
         the point has run ``CHAOS_WATCH`` cycles in all, testing the tail after each run as
         step 2 does: a chaotic transient that settles on a stable orbit within them is
         confirmed by step 3 (Newton at the classification's rtol) and returned."""
         while self.cycles < min(CHAOS_WATCH, self.max_transient):
             cycles = min(WATCH_CHUNK, self.max_transient - self.cycles)
-            run = evolve(self.flow, self._last(), cycles=cycles, start_at_section=True)
+            run = evolve(self.watch, self._last(), cycles=cycles, start_at_section=True)
             self.sections.append(run.sections[1:])
             self.cycles += cycles
             found = self._try_period()
