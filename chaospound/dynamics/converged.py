@@ -51,7 +51,7 @@ confidences of ``docs/classification.md``), doing less work per point:
    ``CHAOS_WATCH`` cycles in all: until then the sections go on at
    ``WATCH_RTOL``, ``WATCH_CHUNK`` cycles at a time, each run's tail
    tested as in step 2, and a chaotic transient that settles on a stable orbit
-   is that orbit, confirmed by step 3 (fig4's scan: 23 of 277 points read
+   is that orbit, confirmed by step 3 (fig4's scan: 22 of 277 points read
    chaotic after some 100-300 cycles settle on group-periodic orbits before
    1000; the careful classifier, which runs 6000, names them so too). lambda
    below minus it: the motion
@@ -134,7 +134,7 @@ CORRELATION_BLOCKS = 5  #: blocks from which their correlation widens the error
 Z_EARLY = 4.0  #: |lambda| / sigma deciding before the cap
 EXPONENT_CAP = 300  #: cycles of exponent at most per stage
 #: cycles a point must have run before a positive exponent names it chaotic: a chaotic
-#: transient that ends on a stable orbit within them is that orbit (fig4: 23 of 277)
+#: transient that ends on a stable orbit within them is that orbit (fig4: 22 of 277)
 CHAOS_WATCH = 1000
 WATCH_CHUNK = 50  #: cycles per run of the sections while watching
 #: their rtol: the watch asks only whether a period comes within NEWTON_TRY (1e-2) for
