@@ -41,7 +41,7 @@ import signal
 import threading
 import time
 from collections import deque
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 
@@ -479,7 +479,7 @@ class _Task:
 
 
 class _Plan:
-    """Which points remain, cut into tasks, and the keys of those tasks per branch.
+    """Which points remain, and their tasks.
 
     Bookkeeping is a few bytes per point (index arrays): the tasks of the
     "fresh" branch are cut lazily, continuation chains are rows of the
@@ -490,7 +490,8 @@ class _Plan:
                  chunk: int) -> None:
         self.spec = spec
         self.chunk = chunk
-        self.task_keys: dict[str, Sequence[tuple[int, int]]] = {}
+        self.branches: list[str] = list(orders)
+        self._fresh_tasks = 0
         self.remaining: dict[tuple[str, int], np.ndarray] = {}
         self.total = 0
         self._chain_starts: list[_Task] = []
@@ -499,11 +500,9 @@ class _Plan:
             pending = writer.pending(branch)
             if branch == "fresh":
                 self._fresh_todo = order[pending[order]]
-                n_tasks = math.ceil(self._fresh_todo.size / chunk)
-                self.task_keys[branch] = _FreshKeys(n_tasks)
+                self._fresh_tasks = math.ceil(self._fresh_todo.size / chunk)
                 self.total += int(self._fresh_todo.size)
                 continue
-            keys: list[tuple[int, int]] = []
             for c, chain in enumerate(order.reshape(-1, spec.shape[-1])):
                 waiting = pending[chain]
                 if not waiting.any():
@@ -511,17 +510,15 @@ class _Plan:
                 first = int(np.flatnonzero(waiting)[0])
                 todo = chain[first:]
                 state = writer.final_state(branch, int(chain[first - 1])) if first > 0 else None
-                keys += [(c, seg) for seg in range(math.ceil(todo.size / chunk))]
                 self.remaining[(branch, c)] = todo
                 self.total += int(todo.size)
                 self._chain_starts.append(self._segment(branch, c, 0, state))
-            self.task_keys[branch] = keys
 
     def tasks(self) -> Iterator[_Task]:
         """The first task of every chain, then the fresh points' tasks, cut as needed."""
         yield from self._chain_starts
         todo, chunk = self._fresh_todo, self.chunk
-        for k in range(len(self.task_keys.get("fresh", ()))):
+        for k in range(self._fresh_tasks):
             yield _Task("fresh", (k, 0), todo[k * chunk:(k + 1) * chunk], None, False, True)
 
     def _segment(self, branch, chain, seg, state) -> _Task:
@@ -539,21 +536,6 @@ class _Plan:
         return self._segment(task.branch, task.key[0], task.key[1] + 1, state)
 
 
-class _FreshKeys(Sequence):
-    """Keys of the fresh branch's tasks, (0, 0), (1, 0), ..., without a list."""
-
-    def __init__(self, n: int) -> None:
-        self.n = n
-
-    def __len__(self) -> int:
-        return self.n
-
-    def __getitem__(self, k):
-        if not 0 <= k < self.n:
-            raise IndexError(k)
-        return (k, 0)
-
-
 def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: str):
     from .store import REGIMES
 
@@ -565,7 +547,7 @@ def _execute(plan: _Plan, backend, writer: SweepWriter, progress: bool, path: st
     # keys every point by its grid index (so the file does not depend on that order),
     # and a continuation chain's segments arrive in the chain's order, so what is
     # committed of a chain is always its first points (what --resume continues from)
-    staged: dict[str, list[PointResult]] = {b: [] for b in plan.task_keys}
+    staged: dict[str, list[PointResult]] = {b: [] for b in plan.branches}
     committed = 0
     last_commit = time.monotonic()
     writing = False

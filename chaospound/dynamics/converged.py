@@ -242,9 +242,9 @@ class _Classifier:
         self.record = record
         self.target, self.rtol, self.atol = _classification_system(system)
         self.flow = _exponent_system(self.target, self.rtol)
-        self.watch = (self.flow if self.flow.method == "rk4" or self.flow.rtol >= WATCH_RTOL
-                      else _with_solver(self.target, {"rtol": WATCH_RTOL,
-                                                      "atol": ATOL_PER_RTOL * WATCH_RTOL}))
+        self.watch_flow = (self.flow if self.flow.method == "rk4" or self.flow.rtol >= WATCH_RTOL
+                           else _with_solver(self.target, {"rtol": WATCH_RTOL,
+                                                           "atol": ATOL_PER_RTOL * WATCH_RTOL}))
         self.tol = TOL_PER_RTOL * self.rtol if tol is None else float(tol)
         if not (math.isfinite(self.tol) and self.tol > 0.0):
             raise ValueError(f"tol = {tol}: must be a finite number > 0")
@@ -468,7 +468,7 @@ class _Classifier:
         confirmed by step 3 (Newton at the classification's rtol) and returned."""
         while self.cycles < min(CHAOS_WATCH, self.max_transient):
             cycles = min(WATCH_CHUNK, self.max_transient - self.cycles)
-            run = evolve(self.watch, self._last(), cycles=cycles, start_at_section=True)
+            run = evolve(self.watch_flow, self._last(), cycles=cycles, start_at_section=True)
             self.sections.append(run.sections[1:])
             self.cycles += cycles
             found = self._try_period()
