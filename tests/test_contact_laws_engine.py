@@ -118,7 +118,8 @@ def test_tangent_dynamics_are_composed_for_every_law_on_the_point_models():
     sensitivity (tests/test_contact_tangent.py), Kelvin-Voigt's jumping force its
     saltation matrix (tests/test_saltation.py) and Jankowski's singular Jacobian the
     approach phase's shift (tests/test_jankowski_tangent.py), which only its point
-    tangent compositions compile; a model that does not carry a law's memory is refused."""
+    modules compile, and a run without vectors skips (a plain run shares the tangent
+    module); a model that does not carry a law's memory is refused."""
     from chaospound.engine.compose import Composition, check_tangent, generate_source
 
     for model in ("wall", "pair"):
@@ -126,13 +127,17 @@ def test_tangent_dynamics_are_composed_for_every_law_on_the_point_models():
             check_tangent(Composition(model, law, tangent="propagator"))
         assert "LAW_SHIFTED = True" in generate_source(Composition(model, "jankowski",
                                                                    tangent="qr"))
-        assert "LAW_SHIFTED = False" in generate_source(Composition(model, "jankowski"))
+        plain = Composition(model, "jankowski")
+        assert plain.compiled() == Composition(model, "jankowski", tangent="qr")
+        assert generate_source(plain) == generate_source(plain.with_tangent("propagator"))
         assert "LAW_SHIFTED = False" in generate_source(Composition(model, "kelvin-voigt",
                                                                     tangent="qr"))
     assert "LAW_SHIFTED = False" in generate_source(Composition("towers", "jankowski",
                                                                 tangent="qr"))
     with pytest.raises(ValueError, match="not available"):
         check_tangent(Composition("lorenz", "hertzdamp", tangent="qr"))
+    # ... and its plain runs keep a module of their own
+    assert Composition("lorenz", "hertzdamp").compiled().tangent == "none"
 
 
 def test_a_law_rejects_an_impossible_restitution():

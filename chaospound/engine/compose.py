@@ -212,11 +212,22 @@ class Composition:
                            self.ground_y)
 
     def compiled(self) -> Composition:
-        """The composition whose engine module runs this one: "qr" and "propagator"
-        integrate the same tangent vectors and differ only in what the loop records
-        at a section (its ``propagate`` argument, like the other output choices), so
-        both run the "qr" module and a process compiles it once."""
-        return self.with_tangent("qr") if self.tangent == "propagator" else self
+        """The composition whose engine module runs this one: the "qr" module runs
+        all three tangents. "qr" and "propagator" integrate the same tangent vectors
+        and differ only in what the loop records at a section (its ``propagate``
+        argument, like the other output choices); a state without vectors ("none")
+        skips them at run time (the loop's ``n_vectors`` is 0, and the right-hand side
+        tests the state's length), the same arithmetic as a module without them.
+        One module per composition is one compile per process where a run and its
+        exponents or orbit follow each other (a sweep point, classify, a test file).
+        A composition whose tangent dynamics :func:`check_tangent` refuses keeps its
+        own "none" module."""
+        if self.tangent == "none":
+            try:
+                check_tangent(self.with_tangent("qr"))
+            except ValueError:
+                return self
+        return self if self.tangent == "qr" else self.with_tangent("qr")
 
     def label(self) -> str:
         """Short human label: ``towers/hertz/sine/dopri5`` (``sine+y`` with ground_y)."""
@@ -306,7 +317,7 @@ def _bindings(c: Composition) -> str:
         f"GROUND_Y = {c.ground_y}",
         f"GROUND_PERIODIC = {c.ground in ('sine', 'none')}",
         f"GROUND_KINKS = {bool(importlib.import_module(ground).KINKS)}",
-        f"TANGENT = {c.tangent != 'none'}",
+        f"TANGENT = {c.tangent != 'none'}",  # vectors may ride along (their count: run time)
         f"ADAPTIVE = {method.adaptive}",
         f"NEW_EVALS = {method.new_evals}",
         f"DENSE_EVALS = {method.dense_evals}",

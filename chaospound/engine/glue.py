@@ -2,10 +2,10 @@
 
 A template (:mod:`.compose`). ``rhs(t, y, p, out)`` evaluates the ground motion
 and calls ``rhs_grounded``, which the composition binds to
-:func:`rhs_plain` (the state alone) or :func:`rhs_tangent` (the state
-followed by tangent vectors: the variational equations ``V' = J V`` of
-docs/model.md section 12, with the model's linearisation computed once per
-call and applied to each vector).
+:func:`rhs_tangent` (the state, followed by the tangent vectors if it has any: the
+variational equations ``V' = J V`` of docs/model.md section 12, with the model's
+linearisation computed once per call and applied to each vector), or, where the
+composition's tangent dynamics are refused, :func:`rhs_plain` (the state alone).
 """
 
 from chaospound.kernels.free import (
@@ -51,9 +51,12 @@ def rhs_tangent(t, y, p, ug, vg, out):
 
     A law with memory adds ``(df/dxi) dxi_i`` to vector i, ``dxi_i`` its memory
     sensitivity written at the episode's onset (:mod:`chaospound.engine.memory`).
+    A state without vectors is :func:`rhs_plain`'s arithmetic: the tangent module
+    runs plain states too (:meth:`chaospound.engine.compose.Composition.compiled`).
     """
     model_rhs(t, y, p, ug, vg, out)
-    _vectors_rhs(t, y, p, out)
+    if y.shape[0] > N_BASE:
+        _vectors_rhs(t, y, p, out)
 
 
 @kernel

@@ -159,9 +159,9 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         stored here; "propagator", shape (k_end - k_record, k n), the vectors of
         the cycle just ended are stored here and reset to the unit vectors.
     propagate : bool
-        Tangent compositions only: record "propagator" (True) or "qr" (False)
-        at the sections. The two integrate the same tangent vectors and differ
-        only in this record, so they share one compiled engine.
+        With tangent vectors: record "propagator" (True) or "qr" (False) at the
+        sections. The two integrate the same tangent vectors and differ only in
+        this record; one compiled engine runs both, and states without vectors.
     vectors, scalars, ev_end : ndarray
         Workspaces: (MAX_STAGES + MAX_DENSE + 5, n), (N_SCALARS,) and
         (MAX_EVENTS,) int64. Compiled without numba's reference-counting
@@ -175,6 +175,11 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     n = y.shape[0]
     n_base = N_BASE
     n_vectors = n // n_base - 1 if TANGENT else 0
+    # a tangent engine also runs states without vectors (Composition.compiled): its
+    # point contact's switches and shifts act on the vectors only
+    shifted = LAW_SHIFTED and n_vectors > 0
+    point_jumps = POINT_JUMPS and n_vectors > 0
+    point_switch = POINT_SWITCH and n_vectors > 0
     period = p[P_PERIOD]
     t0 = p[P_PHASE0]
     capacity = imp.shape[0]
@@ -206,7 +211,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         reset_tangent_memory(p, n_vectors)  # the tangent starts at the packed memory
 
     clipped = False  # a point contact's no-pull force is clipped (tangent runs)
-    if LAW_SHIFTED:
+    if shifted:
         # Jankowski's point contact: the approach phase's tangent vectors are shifted
         # (clipped: separating or out of contact, no shift), decided before the first
         # derivative, which depends on it (docs/contact_laws.md section 7)
@@ -233,7 +238,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     active = inside_lo or inside_hi
     if LAW_JUMPS:  # the law's Jacobian follows the event flags (docs/contact_laws.md 7)
         law_on_sides(p, LAW, inside_lo, inside_hi)
-    if POINT_JUMPS:
+    if point_jumps:
         clipped = inside_lo and law_point_switch(p, LAW, ends_old[0], ends_old[2]) < 0.0
         law_on_switch(p, LAW, clipped)
     episode = -1  # row of the impact whose episode is running, -1 if none recorded
@@ -252,7 +257,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     while True:
         if at_section:
             at_section = False
-            if LAW_SHIFTED and not clipped and n_vectors > 0 and attempts > 0:
+            if shifted and not clipped and n_vectors > 0 and attempts > 0:
                 # the vectors are read and reset as themselves, not in the shifted form
                 model_ends(t0, y, p, ends_tmp)
                 shift_tangent(p, ends_tmp[0], True, y, n_base, n_vectors, work2)
@@ -281,7 +286,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             if k >= k_end:
                 record_done = True
             seg_end = period
-            if LAW_SHIFTED and not clipped and n_vectors > 0:  # back to the shifted form
+            if shifted and not clipped and n_vectors > 0:  # back to the shifted form
                 model_ends(t0, y, p, ends_tmp)
                 shift_tangent(p, ends_tmp[0], False, y, n_base, n_vectors, work2)
                 rhs(t0, y, p, f0)
@@ -376,7 +381,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                     ev_theta[n_ev] = theta2
                     ev_end[n_ev] = end
                     n_ev += 1
-        if POINT_SWITCH and inside_lo:
+        if point_switch and inside_lo:
             # in contact, the no-pull switch k d + c d' = 0 of a point contact (Jankowski:
             # d' = 0): the force is continuous there but its Jacobian jumps, which an
             # un-located step would integrate to first order only
@@ -444,7 +449,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
         for i in range(n_ev):
             theta = ev_theta[i]
             end = ev_end[i]
-            if LAW_SHIFTED and end == SWITCH_END:
+            if shifted and end == SWITCH_END:
                 if inside_lo:  # (no switch after a release earlier in the step)
                     # Jankowski's d' = 0: the vectors change form (shifted while
                     # approaching) and the Jacobian its phase
@@ -459,7 +464,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                                       work2)
                     salted = True
                 continue
-            if POINT_JUMPS and end == SWITCH_END:
+            if point_jumps and end == SWITCH_END:
                 if inside_lo:  # (no switch after a release earlier in the step)
                     clipped = not clipped
                     law_on_switch(p, LAW, clipped)
@@ -493,7 +498,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                 inside_hi = not inside_hi
             if LAW_JUMPS:
                 law_on_sides(p, LAW, inside_lo, inside_hi)
-            if LAW_SHIFTED and clipped != (not inside_lo):
+            if shifted and clipped != (not inside_lo):
                 # an onset starts an approach (d' >= 0), a release ends the contact: the
                 # vectors keep their form (the shift is the identity at d = 0), the
                 # Jacobian changes phase
@@ -504,7 +509,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                         carry_shift(dense, y, t_here, h_try, theta, t_ev, p, False, clipped,
                                     y_new, n_base, n_vectors, work, work2)
                     salted = True
-            if POINT_JUMPS and n_vectors > 0:
+            if point_jumps and n_vectors > 0:
                 # the point force jumps here: the saltation matrix maps the tangent
                 # vectors (docs/contact_laws.md section 7)
                 clipped = False  # from an onset (k d + c d' = c d' > 0), or out of contact
@@ -562,7 +567,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             active = now_active
         if status != STATUS_OK:
             break
-        if POINT_SWITCH and salted:
+        if point_switch and salted:
             # the step's last derivative is the next step's first stage: the vectors'
             # part again, from the mapped vectors with the Jacobian of the new side
             rhs_vectors(t_here + h_try, y_new, p, f_new)

@@ -9,7 +9,7 @@ integrators report as a non-finite state).
 
 ``inline`` is ``kernel`` plus LLVM's always-inline: the model bodies, the
 contact law and the ground motion, which then compile into one flat
-right-hand side (``rhs_plain`` of :mod:`chaospound.engine.glue`) instead of a
+right-hand side (``rhs_tangent`` of :mod:`chaospound.engine.glue`) instead of a
 chain of calls that each pass three arrays field by field.
 
 ``driver`` compiles kernels that allocate their own workspaces and so need the
