@@ -47,6 +47,13 @@ which one the careful classifier (as in ``agreement``) supports: for each pair
 classified carefully. Writes results/classify_changes.json and .md, or ``--output``
 (its .md beside).
 
+``budget``: where the default sweep of the 1000-point fig4 scan spends its time, regime
+by regime (each point's own wall time, one worker), and the floor of its chaos watch:
+``CHAOS_WATCH`` cycles of sections from each chaotic point's final state at
+``--floor-rtol`` (1e-4, ten times looser than the watch's), against issue 17's 15x
+budget (the old tree's ``--classify full`` wall time of
+results/bench_classify_baseline.json over 15). Writes results/classify_budget.json.
+
 ``table``: the careful classifier (:func:`~chaospound.dynamics.classify.classify`, its
 defaults) at the T/T_Ax of docs/classification.md's "Measured" table, fig4 and
 fig4-translational; prints the table's rows.
@@ -59,6 +66,7 @@ Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds
      PYTHONPATH=. python benchmarks/bench_classify.py agreement --per-set 67
      PYTHONPATH=. python benchmarks/bench_classify.py birkhoff
      PYTHONPATH=. python benchmarks/bench_classify.py table
+     PYTHONPATH=. python benchmarks/bench_classify.py budget
      PYTHONPATH=. python benchmarks/bench_classify.py changes --preset fig4 \
          --old before.h5 --new after.h5 --per-change 16
 """
@@ -174,6 +182,64 @@ def baseline(old: Path, points: int, rounds: int, interval: str) -> dict:
         "new_converged_over_old_full": ratios,
         "median_new_converged_over_old_full": float(np.median(ratios)),
         "regimes_last_round": summaries,
+    }
+
+
+def budget(points: int, floor_rtol: float) -> dict:
+    """Where the default scan's time goes, and the floor of its chaos watch.
+
+    Runs the default sweep of the fig4 scan (``points`` points over T/T_Ax 0.3-2.0,
+    one worker, warm kernels) and sums each point's own wall time (the store's
+    ``wall_s``) by regime. Then, from each chaotic point's stored final section, it
+    times ``CHAOS_WATCH`` cycles of sections at ``floor_rtol`` (default 1e-4, ten times
+    looser than the watch's own ``WATCH_RTOL``): a lower bound of what any watch that
+    long costs those points. Issue 17's 15x is read against the old tree's
+    ``--classify full`` wall time of results/bench_classify_baseline.json.
+    """
+    from chaospound.dynamics.classify import ATOL_PER_RTOL, _with_solver
+    from chaospound.dynamics.converged import CHAOS_WATCH
+    from chaospound.dynamics.system import as_system, evolve
+    from chaospound.store import open_sweep
+
+    scene = load_preset("fig4")
+    spec = SweepSpec(axes=(parse_axis(f"period_ratio=0.3:2.0#{points}"),))
+    with tempfile.TemporaryDirectory() as tmp:
+        run_sweep(scene, SweepSpec(axes=(parse_axis("period_ratio=0.7:0.8#2"),)),
+                  os.path.join(tmp, "warm.h5"), progress=False)
+        t0 = time.perf_counter()
+        run_sweep(scene, spec, os.path.join(tmp, "scan.h5"), workers=1, progress=False)
+        scan_wall = time.perf_counter() - t0
+        with open_sweep(os.path.join(tmp, "scan.h5")) as store:
+            regimes = np.array(store.regimes())
+            wall = store.array("wall_s")
+            final = store.array("final_state")
+            ratios = store.points()[:, 0]
+    by_regime = {str(r): {"points": int((regimes == r).sum()),
+                          "wall_s": float(wall[regimes == r].sum()),
+                          "mean_ms": 1e3 * float(wall[regimes == r].mean())}
+                 for r in np.unique(regimes)}
+    chaotic = np.flatnonzero(regimes == "chaotic")
+    floor = 0.0
+    for i in chaotic:
+        target = as_system(scene.with_params(period_ratio=float(ratios[i])))
+        flow = _with_solver(target, {"rtol": floor_rtol, "atol": ATOL_PER_RTOL * floor_rtol})
+        t0 = time.perf_counter()
+        evolve(flow, final[i], cycles=CHAOS_WATCH, start_at_section=True)
+        floor += time.perf_counter() - t0
+    baseline_file = RESULTS / "bench_classify_baseline.json"
+    old_full = float(np.median(json.loads(baseline_file.read_text())["wall_s"]["old full"]))
+    allowed = old_full / 15.0
+    others = sum(v["wall_s"] for r, v in by_regime.items() if r != "chaotic")
+    return {
+        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+        "slice": f"fig4 period_ratio=0.3:2.0#{points}",
+        "scan_wall_s": scan_wall,
+        "by_regime": by_regime,
+        "old_full_wall_s": old_full,
+        "budget_15x_s": allowed,
+        "watch_floor": {"rtol": floor_rtol, "cycles": CHAOS_WATCH,
+                        "chaotic_points": int(len(chaotic)), "seconds": floor},
+        "others_plus_watch_floor_s": others + floor,
     }
 
 
@@ -421,6 +487,10 @@ def main() -> None:
     ag.add_argument("--careful-exponent", type=int, default=400)
     sub.add_parser("birkhoff")
     sub.add_parser("table")
+    bu = sub.add_parser("budget")
+    bu.add_argument("--points", type=int, default=1000)
+    bu.add_argument("--floor-rtol", type=float, default=1e-4)
+    bu.add_argument("--output", type=Path, default=RESULTS / "classify_budget.json")
     ch = sub.add_parser("changes")
     ch.add_argument("--preset", required=True)
     ch.add_argument("--old", type=Path, required=True, help="the store before")
@@ -440,6 +510,9 @@ def main() -> None:
         args.output.write_text(json.dumps(out, indent=1) + "\n")
     elif args.part == "table":
         out = table()
+    elif args.part == "budget":
+        out = budget(args.points, args.floor_rtol)
+        args.output.write_text(json.dumps(out, indent=1) + "\n")
     elif args.part == "changes":
         from chaospound.sweep import single_thread_blas
 
