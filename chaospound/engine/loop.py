@@ -257,7 +257,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
     while True:
         if at_section:
             at_section = False
-            if shifted and not clipped and n_vectors > 0 and attempts > 0:
+            if shifted and not clipped and attempts > 0:
                 # the vectors are read and reset as themselves, not in the shifted form
                 model_ends(t0, y, p, ends_tmp)
                 shift_tangent(p, ends_tmp[0], True, y, n_base, n_vectors, work2)
@@ -286,7 +286,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
             if k >= k_end:
                 record_done = True
             seg_end = period
-            if shifted and not clipped and n_vectors > 0:  # back to the shifted form
+            if shifted and not clipped:  # back to the shifted form
                 model_ends(t0, y, p, ends_tmp)
                 shift_tangent(p, ends_tmp[0], False, y, n_base, n_vectors, work2)
                 rhs(t0, y, p, f0)
@@ -509,7 +509,7 @@ def run(p, y, clock, k_record, k_end, rtol, atol, h_fixed, max_steps, restart, n
                         carry_shift(dense, y, t_here, h_try, theta, t_ev, p, False, clipped,
                                     y_new, n_base, n_vectors, work, work2)
                     salted = True
-            if point_jumps and n_vectors > 0:
+            if point_jumps:
                 # the point force jumps here: the saltation matrix maps the tangent
                 # vectors (docs/contact_laws.md section 7)
                 clipped = False  # from an onset (k d + c d' = c d' > 0), or out of contact
