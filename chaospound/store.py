@@ -88,7 +88,7 @@ from .messages import shorten
 from .units import UNITS
 
 __all__ = ["FORMAT", "REGIMES", "StoreWriteError", "SweepFile", "SweepStoreError",
-           "SweepWriter", "open_sweep"]
+           "SweepWriter", "check_replaceable", "open_sweep"]
 
 FORMAT = "chaospound-sweep"
 FORMAT_VERSION = 1
@@ -249,6 +249,8 @@ class SweepWriter:
                 raise SweepStoreError(str(exc)) from None
             _check_same_sweep(self.journal.attrs, self.path, meta)
             return
+        if self.path.exists():
+            check_replaceable(self.path)  # a file of the user's own is never replaced
         if self.path.exists() and not overwrite:
             if not resume:
                 raise SweepStoreError(f"{self.path}: file exists (use --resume to finish it or "
@@ -869,6 +871,18 @@ def _open_readonly(path: Path) -> h5py.File:
         f.close()
         raise SweepStoreError(f"{path}: store format version is newer than this chaospound")
     return f
+
+
+def check_replaceable(path) -> None:
+    """Refuse an output path that holds something other than a chaospound store: neither
+    ``--resume`` nor ``--overwrite`` may touch a scene file, a record or a foreign HDF5
+    file that an ``-o`` happens to name."""
+    try:
+        with _open_readonly(Path(path)):
+            pass
+    except SweepStoreError as exc:
+        raise SweepStoreError(f"{exc}; it is left as it is: choose another output, or remove "
+                              "the file first") from None
 
 
 def _short(exc: Exception) -> str:

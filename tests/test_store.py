@@ -298,6 +298,8 @@ def test_foreign_files_are_refused_and_left_alone(tmp_path):
         (other, {"resume": True}, "not a chaospound sweep store"),
         (different, {"resume": True}, "different sweep"),
         (different, {}, "file exists"),
+        (text, {"overwrite": True}, "not a readable HDF5 file.*left as it is"),
+        (other, {"overwrite": True}, "not a chaospound sweep store.*left as it is"),
     ):
         before = (path.read_bytes(), os.stat(path).st_mtime_ns)
         with pytest.raises(SweepStoreError, match=match):

@@ -255,6 +255,10 @@ def _check_sweep_output(path: str, *, resume: bool, overwrite: bool) -> None:
     if running is not None:
         raise CliError(f"output {_path(path)}: a running sweep ({running}) is writing it; wait for "
                        "it to finish or stop it first")
+    if os.path.exists(path):
+        from chaospound.store import check_replaceable
+
+        check_replaceable(path)  # not a store: never resumed, never replaced
     if resume or overwrite:
         return
     if os.path.exists(path + ".journal"):
