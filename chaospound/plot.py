@@ -964,7 +964,13 @@ def cell_edges(values: np.ndarray) -> np.ndarray:
 
 
 # ==================================================================== save
-def save(fig: Figure, path: str | os.PathLike[str], *, dpi: int = 150) -> None:
+#: the raster formats :func:`save` writes pixel by pixel (matplotlib's Agg backend)
+RASTER_FORMATS = ("png", "jpg", "jpeg", "tif", "tiff", "webp", "raw", "rgba")
+MAX_RASTER_SIDE = 32768  #: pixels a side at most (Agg refuses 65536)
+MAX_RASTER_PIXELS = 2e8  #: pixels in all at most (0.8 GB of RGBA)
+
+
+def save(fig: Figure, path: str | os.PathLike[str], *, dpi: float = 150) -> None:
     """Write a figure atomically: a temporary file in the same folder, then a rename.
 
     The format follows the extension (``.png``, ``.pdf``, ``.svg``, ...).
@@ -975,15 +981,23 @@ def save(fig: Figure, path: str | os.PathLike[str], *, dpi: int = 150) -> None:
     FileNotFoundError
         The target's folder does not exist.
     ValueError
-        An unknown format (from matplotlib).
+        An unknown format (from matplotlib), or a raster image larger than
+        :data:`MAX_RASTER_SIDE` pixels on a side or :data:`MAX_RASTER_PIXELS` in all.
     """
     path = os.fspath(path)
+    extension = os.path.splitext(path)[1].lstrip(".").lower() or "png"
+    if extension in RASTER_FORMATS:
+        width, height = (float(v) * float(dpi) for v in fig.get_size_inches())
+        if max(width, height) > MAX_RASTER_SIDE or width * height > MAX_RASTER_PIXELS:
+            raise ValueError(
+                f"a {width:.0f} x {height:.0f} pixel image is too large to write "
+                f"(at most {MAX_RASTER_SIDE} pixels a side and {MAX_RASTER_PIXELS:.0e} in "
+                f"all): lower the size or the dpi, or write .pdf or .svg")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise FileNotFoundError(f"cannot save figure to {path!r}: folder {folder!r} does not exist")
     if os.path.isdir(path):
         raise IsADirectoryError(f"cannot save figure to {path!r}: it is a directory")
-    extension = os.path.splitext(path)[1].lstrip(".").lower() or "png"
     handle, temporary = tempfile.mkstemp(dir=folder, prefix=".chaospound-", suffix=".tmp")
     try:
         os.chmod(temporary, _new_file_mode())

@@ -472,6 +472,12 @@ def test_plot_command_size_dpi_limits_and_vector_output(hysteresis_file, capsys,
     for bad in (["--size", "0,3"], ["--xlim", "2,1"], ["--dpi", "0"], ["--ylim", "1"]):
         code, out, err = run_cli(capsys, "plot", str(hysteresis_file), *bad)
         assert code == 2 and out == "" and err.count("\n") == 1 and bad[0] in err
+    # a raster image too large for memory is refused before matplotlib allocates it
+    for bad in (["--size", "1000,1000"], ["--dpi", "100000"]):
+        huge = hysteresis_file.with_name("huge.png")
+        code, out, err = run_cli(capsys, "plot", str(hysteresis_file), "-o", str(huge), *bad)
+        assert code == 2 and out == "" and err.count("\n") == 1 and "too large" in err
+        assert not huge.exists()
     code, out, err = run_cli(capsys, "plot", "--help")
     assert code == 0
     for word in ("--dpi", "--size", "--xlim", "--ylim", ".pdf", ".svg", "vector"):

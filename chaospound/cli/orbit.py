@@ -298,6 +298,8 @@ def _plot_branch_file(args: argparse.Namespace) -> int:
         save(fig, output, dpi=args.dpi)
     except OSError as exc:
         raise CliError(f"cannot write {_path(output)}: {exc.strerror or exc}") from None
+    except ValueError as exc:  # a raster image too large for memory
+        raise CliError(f"{_path(output)}: {exc}") from None
     _emit(f"wrote {output}: bifurcation diagram of {len(branches)} continued branch(es) in "
           f"{data.parameter}" + (f" over {args.over}" if over is not None else "")
           + " and their Floquet multipliers")

@@ -118,6 +118,8 @@ def _cmd_plot(args: argparse.Namespace) -> int:
         save(fig, output, dpi=args.dpi)
     except OSError as exc:
         raise CliError(f"cannot write {_path(output)}: {exc.strerror or exc}") from None
+    except ValueError as exc:  # a raster image too large for memory
+        raise CliError(f"{_path(output)}: {exc}") from None
     kind = "bifurcation diagram" if len(sweep.parameters) == 1 else "regime map"
     kind = "basin map" if basin else kind
     if args.orbit is not None:
