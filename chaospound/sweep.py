@@ -249,6 +249,11 @@ class SweepSummary:
     notes: list[str] = field(default_factory=list)  #: said once, e.g. regimes not classified
 
     @property
+    def all_failed(self) -> bool:
+        """Every point stored failed (a step budget or tolerance no point could meet)."""
+        return self.failed > 0 and self.failed >= self.stored
+
+    @property
     def points_per_second(self) -> float:
         return self.computed / self.wall_s if self.wall_s > 0 else float("nan")
 
@@ -257,13 +262,14 @@ class SweepSummary:
                            if v and k != "failed")
         if self.finished_before:
             return (f"{self.path}: finished already: all {self.points} points are stored, "
-                    f"nothing to resume\nregimes: {counts or 'none'}; failed: {self.failed}")
+                    f"nothing to resume\nregimes: {counts or 'no point classified'}; "
+                    f"failed: {self.failed}")
         lines = [
             f"{self.path}: {self.computed} points computed ({self.points} in the grid) "
             f"in {self.wall_s:.2f} s with {self.workers} worker(s), "
             f"{self.points_per_second:.1f} points/s"
             + ("" if self.stored == self.computed else f"; {self.stored} stored in all"),
-            f"regimes: {counts or 'none'}; failed: {self.failed}",
+            f"regimes: {counts or 'no point classified'}; failed: {self.failed}",
         ]
         lines += [f"  failed: {m}" for m in self.messages[:5]]
         lines += [f"note: {n}" for n in self.notes]

@@ -291,6 +291,16 @@ def test_failed_points_are_recorded_and_the_sweep_goes_on(tmp_path, capsys):
         assert bitwise(sweep.impacts(i)["velocity"], reference.impacts(i)["velocity"])
         assert bitwise(sweep.strobe(i), reference.strobe(i))
 
+    # a budget no point meets: the file is complete, the run a numerical failure (exit 1),
+    # and the summary names no regime ("none" is the regime without impacts)
+    hopeless = tmp_path / "hopeless.h5"
+    code, out, err = run(capsys, "sweep", "--preset", "wall", *SHORT, "--set",
+                         f"max_steps={int(ordered[0]) - 1}", "--param", grid, "--classify",
+                         "paper", "-o", hopeless, "--quiet")
+    assert code == 1 and "regimes: no point classified; failed: 14" in out
+    assert err.count("\n") == 1 and "every point of" in err and "max_steps" in err
+    assert open_sweep(hopeless).status() == ["failed"] * 14
+
 
 # ------------------------------------------------------ interruption, resume
 

@@ -123,6 +123,10 @@ def _cmd_basins(args: argparse.Namespace) -> int:
         if client is not None:
             disconnect(client, cluster)
     _emit(summary.format())
+    if summary.all_failed:  # a numerical failure: no attractor to map
+        return _fail(f"every initial state of {args.output} failed"
+                     + (f" (the first: {summary.messages[0]})" if summary.messages else ""),
+                     EXIT_FAILURE)
     _emit(result.format())
     if args.plot is not None:
         from chaospound.plot import save

@@ -224,6 +224,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         if client is not None:
             disconnect(client, cluster)
     _emit(summary.format())
+    if summary.all_failed:  # a numerical failure, however many points
+        return _fail(f"every point of {args.output} failed"
+                     + (f" (the first: {summary.messages[0]})" if summary.messages else ""),
+                     EXIT_FAILURE)
     return EXIT_OK
 
 
