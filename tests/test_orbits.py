@@ -436,6 +436,11 @@ def test_duffing_frequency_response_folds_against_brute_force():
                                                        "reached frequency = 2.2"]
     for sp in branch.of_kind("fold"):
         assert sp.bracket < 1e-8 and np.min(np.abs(sp.orbit.multipliers - 1.0)) < 1e-8
+    # a step budget that ends the branch early says where, and how to go on
+    short = continue_branch(smap, "frequency", 0.8, 2.2, max_steps=4)
+    assert short.stop_reasons[1].startswith("max_steps = 4 reached at frequency = ")
+    assert float(short.stop_reasons[1].split("= ")[2].split()[0]) == pytest.approx(
+        short.values.max(), rel=1e-9)
     step = 0.02
     grid = np.round(np.arange(0.8, 2.2 + step / 2, step), 12)
 

@@ -457,7 +457,6 @@ def _run_direction(base: StroboscopicMap, start: _Point, t0: np.ndarray, k: int,
                    progress: Callable[[str], None] | None):
     points, tangents, specials = [start], [t0], []
     scale0 = state_scale(start.x)
-    reason = f"max_steps = {max_steps} reached"
     cos_turn = np.cos(np.radians(max_turn))
     while len(points) < max_steps:
         a, t_a = points[-1], tangents[-1]
@@ -501,6 +500,9 @@ def _run_direction(base: StroboscopicMap, start: _Point, t0: np.ndarray, k: int,
             ds = min(ds * 1.5, ds_max * max(1.0, state_scale(b.x) / scale0))
         if progress is not None:
             progress(f"{base.parameter} = {b.lam:.6g}, {len(points)} points, ds = {ds:.3g}")
+    else:
+        reason = (f"max_steps = {max_steps} reached at {base.parameter} = "
+                  f"{points[-1].lam:.10g} (raise max_steps, --max-steps, to go on)")
     return points, tangents, specials, reason
 
 
