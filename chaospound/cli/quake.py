@@ -218,8 +218,11 @@ def _report(run, units, args: argparse.Namespace) -> str:
         ftle = run.lyapunov
         rate = (f"{ftle.exponent / units.time:.4g} 1/s" if units is not None
                 else f"{ftle.exponent:.4g} omega_Ax")
+        change = "grows" if ftle.amplification >= 1.0 else "shrinks"
         summary.append(("finite-time Lyapunov", f"{rate} over the run (separation "
-                        f"{ftle.separation:g} A_g grows by {ftle.amplification:.3g})"))
+                        f"{ftle.separation:g} A_g {change} to "
+                        f"{ftle.separation * ftle.amplification:.3g} A_g, "
+                        f"x {ftle.amplification:.3g})"))
     if run.ensemble is not None:
         e = run.ensemble
         shown = ", ".join(f"p{q:g} {value('force', v)}" for q, v in e.percentiles.items())
