@@ -36,7 +36,7 @@ from decimal import Decimal
 import numpy as np
 
 from .messages import shorten
-from .scene import PARAMETERS, SHORTHANDS, Scene, SceneError
+from .scene import PARAMETERS, SHORTHANDS, Scene, SceneError, _spec
 
 __all__ = [
     "MAX_NUMBER_LENGTH",
@@ -141,6 +141,12 @@ def make_axis(name: str, grid: str, scene: Scene | None = None) -> Axis:
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ValueError(f"unknown sweep parameter {shorten(name, quote=True)}{hint}; "
                          "`chaospound params` lists them all")
+    elif name in PARAMETERS and _spec(name).kind not in ("float", "int"):
+        spec = _spec(name)
+        what = ("one of " + ", ".join(spec.choices) if spec.kind == "choice"
+                else "true or false" if spec.kind == "bool" else "not a number")
+        raise ValueError(f"{name}: not a numeric parameter ({what}); a sweep varies a "
+                         f"number: run one sweep per value with --set {name}=...")
     values = grid_values(name, grid)
     axis = Axis(name=name, values=values, spec=grid)
     if scene is not None:
@@ -179,6 +185,10 @@ def grid_values(name: str, grid: str) -> np.ndarray:
         raise ValueError(f"{shown}: empty range")
     if not np.all(np.isfinite(values)):  # linspace or start + k step beyond the float range
         raise ValueError(f"{shown}: non-finite values (the grid overflows float64)")
+    unique, counts = np.unique(values, return_counts=True)
+    if unique.size < values.size:  # the same point twice: one label, two rows to select
+        raise ValueError(f"{shown}: the value {unique[np.argmax(counts > 1)]:g} is repeated "
+                         "(a grid's values must differ)")
     return values
 
 

@@ -208,6 +208,9 @@ def test_every_grid_form_still_parses():
     ("1:" + "2" * (MAX_NUMBER_LENGTH + 1) + ":1", [f"{MAX_NUMBER_LENGTH + 1} characters"]),
     ("1,2;3", ["not a grid"]),
     ("", ["empty range"]),
+    # the same point twice would be one label stored in two rows
+    ("0.7,0.7", ["value 0.7 is repeated"]),
+    ("0.7:0.7#3", ["value 0.7 is repeated"]),
 ])
 def test_grid_errors(grid, words):
     with pytest.raises(ValueError) as info:
@@ -216,6 +219,16 @@ def test_grid_errors(grid, words):
     assert "\n" not in message and len(message) < 300
     for word in words:
         assert word in message, message
+
+
+def test_a_sweep_of_a_choice_or_a_flag_says_it_is_not_numeric():
+    for text, words in (("contact_law=hertz,linear", ["not a numeric parameter", "hertzdamp",
+                                                      "--set contact_law="]),
+                        ("no_pull=0,1", ["not a numeric parameter", "true or false"])):
+        with pytest.raises(ValueError) as info:
+            parse_axis(text)
+        message = str(info.value)
+        assert "\n" not in message and all(word in message for word in words), message
 
 
 def test_every_value_is_checked_against_the_scene():
@@ -227,8 +240,8 @@ def test_every_value_is_checked_against_the_scene():
     with pytest.raises(ValueError, match=r"transient = 0.5: must be an integer"):
         parse_axis("transient=0:5000:0.5", WALL)
     with pytest.raises(ValueError,
-                       match=r"ecc_y_A=0,1,0: at ecc_y_A = 1.0: model = 'pair': not exact"):
-        parse_axis("ecc_y_A=0,1,0", PAIR)
+                       match=r"ecc_y_A=0,1,0.5: at ecc_y_A = 1.0: model = 'pair': not exact"):
+        parse_axis("ecc_y_A=0,1,0.5", PAIR)
     parse_axis("transient=0:5000:1", WALL)
 
 
