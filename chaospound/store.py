@@ -860,6 +860,8 @@ def _open_readonly(path: Path) -> h5py.File:
     """A finished (or version 0.1) store opened read-only, checked to be a sweep store."""
     if not path.exists():
         raise SweepStoreError(f"{path}: no such file")
+    if path.is_dir():
+        raise SweepStoreError(f"{path}: is a directory, not a sweep store")
     try:
         f = h5py.File(path, "r", locking=False)
     except OSError as exc:

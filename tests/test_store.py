@@ -290,7 +290,8 @@ def test_foreign_files_are_refused_and_left_alone(tmp_path):
     run_sweep(WALL, sweep_of(WALL, "period_ratio=0.6:1.2#4"), different, progress=False)
     for path, match in ((text, "not a readable HDF5 file"),
                         (other, "not a chaospound sweep store"),
-                        (tmp_path / "missing.h5", "no such file")):
+                        (tmp_path / "missing.h5", "no such file"),
+                        (tmp_path, "is a directory, not a sweep store")):
         with pytest.raises(SweepStoreError, match=match):
             open_sweep(path)
     for path, options, match in (
