@@ -1077,6 +1077,7 @@ def plot_branches(branches, ax: Axes | None = None, *, over=None,
             curves = np.full((len(br), width), np.nan)
             for i, o in enumerate(br.orbits):
                 curves[i, :o.impacts_per_period] = o.impact_velocity
+            _follow_curves(curves)
         else:
             curves = br.states[:, :1]
         labelled = False
@@ -1110,6 +1111,26 @@ def plot_branches(branches, ax: Axes | None = None, *, over=None,
     ax.legend(fontsize="small", frameon=False)
     ax.set_label("branches")
     return fig
+
+
+def _follow_curves(curves: np.ndarray) -> None:
+    """Reorder each row's impacts to follow the previous row's, in place.
+
+    An orbit lists its impacts in time from the section; where an impact crosses
+    the section along the branch, the list rotates and "the j-th impact" jumps
+    between two curves (a vertical line across the diagram). Between rows with
+    the same number of impacts, the order that moves the values least (an
+    assignment on |V_i - V_j|) keeps each curve on its own impact.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    for i in range(1, curves.shape[0]):
+        prev, row = curves[i - 1], curves[i]
+        n = int(np.count_nonzero(~np.isnan(row)))
+        if n < 2 or n != np.count_nonzero(~np.isnan(prev)):
+            continue
+        _, order = linear_sum_assignment(np.abs(prev[:n, None] - row[None, :n]))
+        curves[i, :n] = row[:n][order]
 
 
 def plot_multipliers(branches, ax: Axes | None = None) -> Figure:

@@ -644,3 +644,19 @@ def test_orbit_diagram_of_periodic_points_collapses_to_period_cycles_values(wall
         np.testing.assert_allclose(ys[p:], ys[:-p], atol=1e-6)  # repeats after p cycles
         distinct = 1 + np.count_nonzero(np.diff(np.sort(ys)) > 1e-6)
         assert distinct == p  # period 1: every strobe point within 1e-6 of the others
+
+
+def test_branch_curves_follow_their_impact_where_the_list_rotates():
+    """An orbit lists its impacts from the section; where one crosses the section the
+    list rotates. The diagram's curves follow each impact (no vertical jump), and a row
+    with another number of impacts (a grazing) is left as it is."""
+    from chaospound.plot import _follow_curves
+
+    lam = np.linspace(0.0, 1.0, 11)
+    low, high = 1.0 + 0.1 * lam, 5.0 - 0.2 * lam
+    curves = np.stack([low, high], axis=1)
+    curves[6:] = curves[6:, ::-1]  # rotated from row 6 on
+    curves = np.vstack([curves, [[7.0, np.nan]]])  # one impact fewer
+    _follow_curves(curves)
+    assert np.array_equal(curves[:11, 0], low) and np.array_equal(curves[:11, 1], high)
+    assert curves[11, 0] == 7.0 and np.isnan(curves[11, 1])
