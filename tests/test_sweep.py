@@ -515,10 +515,10 @@ def test_bad_sweep_definitions_write_nothing(tmp_path, capsys, argv, words):
     ("text", [], ["not a readable HDF5 file", "left as it is"]),
     ("text", ["--resume"], ["not a readable HDF5 file"]),
     ("other", ["--resume"], ["not a chaospound sweep store"]),
+    ("sweep", ["--resume"], ["different sweep"]),
     # --overwrite replaces a store only, never a file of the user's own
     ("text", ["--overwrite"], ["not a readable HDF5 file", "left as it is"]),
     ("other", ["--overwrite"], ["not a chaospound sweep store", "left as it is"]),
-    ("sweep", ["--resume"], ["different sweep"]),
 ])
 def test_existing_files_are_refused_and_unchanged(capsys, existing_files, which, options,
                                                   words):
