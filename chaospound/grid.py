@@ -141,8 +141,7 @@ def make_axis(name: str, grid: str, scene: Scene | None = None) -> Axis:
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ValueError(f"unknown sweep parameter {shorten(name, quote=True)}{hint}; "
                          "`chaospound params` lists them all")
-    elif name in PARAMETERS and _spec(name).kind not in ("float", "int"):
-        spec = _spec(name)
+    elif name in PARAMETERS and (spec := _spec(name)).kind not in ("float", "int"):
         what = ("one of " + ", ".join(spec.choices) if spec.kind == "choice"
                 else "true or false" if spec.kind == "bool" else "not a number")
         raise ValueError(f"{name}: not a numeric parameter ({what}); a sweep varies a "

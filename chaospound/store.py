@@ -249,7 +249,7 @@ class SweepWriter:
                 raise SweepStoreError(str(exc)) from None
             _check_same_sweep(self.journal.attrs, self.path, meta)
             return
-        if self.path.exists():
+        if self.path.exists() and not resume:  # (a resume checks it as it reads it)
             check_replaceable(self.path)  # a file of the user's own is never replaced
         if self.path.exists() and not overwrite:
             if not resume:
