@@ -52,7 +52,7 @@ def test_internal_kernels_emit_no_machine_code_of_their_own():
     ends.compile(tuple(numba.typeof(a) for a in args))  # as the loop's compile would
     (result,) = ends.overloads.values()
     engine = result.library.codegen._engine
-    assert "define " in result.library.get_llvm_str()  # its optimised IR, to link
+    assert "define " in result.library.get_llvm_str()  # its IR, to link (and optimise there)
     assert not engine.is_symbol_defined(result.fndesc.mangled_name)  # no machine code
     (loop,) = module.run.overloads.values()
     assert loop.library.get_pointer_to_function(loop.fndesc.llvm_cpython_wrapper_name)
