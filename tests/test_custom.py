@@ -210,3 +210,17 @@ def test_a_gap_must_return_value_and_rate():
     with pytest.raises(ValueError, match=r"gap\(t, y, q\)"):
         custom_system(duffing_rhs, duffing_jac, _scalar_gap, params=UEDA, period=1.0,
                       initial_state=(1.0, 0.0))
+
+
+def test_one_engine_serves_a_system_whatever_its_number_of_parameters(user_duffing):
+    # a sixth entry that the functions never read: the same engine module, the same bits
+    longer = custom_system(duffing_rhs, duffing_jac, params=UEDA + (123.0,),
+                           period=2 * math.pi, initial_state=(1.0, 0.0), transient=100,
+                           rtol=1e-9, atol=1e-11)
+    assert longer.engine().module is user_duffing.engine().module
+    mine = simulate(user_duffing, transient=0, record=10)
+    other = simulate(longer, transient=0, record=10)
+    np.testing.assert_array_equal(mine.strobe.state, other.strobe.state)
+    spectrum = lyapunov_spectrum(longer, transient=20, cycles=40)
+    reference = lyapunov_spectrum(user_duffing, transient=20, cycles=40)
+    np.testing.assert_array_equal(spectrum.exponents, reference.exponents)

@@ -423,7 +423,7 @@ def custom_system(rhs, jacobian, gap=None, *,
     return System(name=name, model_id=CUSTOM, params=pack_custom(float(period), q, n),
                   initial_state=y0, period=float(period), state_names=labels,
                   transient=int(transient), record=int(record), n_states=n, ground="none",
-                  user=UserFunctions.of(rhs, jacobian, gap, n, q.size), names=names,
+                  user=UserFunctions.of(rhs, jacobian, gap, n), names=names,
                   period_of=period_of, **solver)
 
 

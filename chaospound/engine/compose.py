@@ -125,23 +125,22 @@ class UserFunctions:
     jacobian: object
     gap: object | None
     n: int
-    n_params: int
     module: str | None
     names: tuple[str, str, str | None]
     digest: str
 
     @classmethod
-    def of(cls, rhs, jacobian, gap, n: int, n_params: int) -> UserFunctions:
+    def of(cls, rhs, jacobian, gap, n: int) -> UserFunctions:
         names = (_name(rhs), _name(jacobian), _name(gap) if gap is not None else None)
         module = _importable_module(rhs, jacobian, gap)
         digest = ""
         if module is not None:
             digest = hashlib.sha256(Path(sys.modules[module].__file__).read_bytes()).hexdigest()
-        return cls(rhs, jacobian, gap, n, n_params, module, names, digest)
+        return cls(rhs, jacobian, gap, n, module, names, digest)
 
     def canonical(self) -> str:
         where = self.module if self.module is not None else f"memory:{id(self.rhs):x}"
-        return f"{where}:{self.names}:{self.digest}:n={self.n}:q={self.n_params}"
+        return f"{where}:{self.names}:{self.digest}:n={self.n}"
 
 
 @dataclass(frozen=True)
@@ -331,8 +330,6 @@ def _bindings(c: Composition) -> str:
             f"N_ENDS = {1 if u.gap is not None else 0}",
             f"USER_HAS_GAP = {u.gap is not None}",
             f"USER_BASE = {N_PARAMS}",
-            f"USER_END = {N_PARAMS + u.n_params}",
-            f"USER_JAC = {N_PARAMS + u.n_params}",
         ]
         if u.module is not None:
             rhs, jac, gap = u.names

@@ -36,7 +36,7 @@ DENSE_EVALS = 0  #: extra rhs evaluations to prepare the dense output
 DENSE_ROWS = 0  #: rows of the dense-output coefficients
 ERROR_ORDER = 0  #: order of the error estimator (initial step)
 TAB_A = TAB_B = TAB_C = None  #: the tableau of a generic explicit method
-USER_BASE = USER_END = USER_JAC = 0  #: a user system's parameters and Jacobian scratch
+USER_BASE = 0  #: where a user system's parameters start (its Jacobian scratch: the last n x n)
 
 # ---- contact law
 law_point_force = law_point_stiffness = law_point_force_rate = law_point_potential = _unbound

@@ -2,10 +2,12 @@
 
 docs/extending.md. The user's numba functions are bound into the composition
 by name (``user_rhs``, ``user_jacobian``, ``user_gap``) together with the
-constants ``N_BASE`` (the dimension), ``USER_HAS_GAP`` and the slots of the
-packed vector: the user's parameters ``q = p[USER_BASE:USER_END]`` and an
-``n x n`` scratch block at ``USER_JAC`` that receives the Jacobian during a
-tangent run (the kernels allocate nothing).
+constants ``N_BASE`` (the dimension), ``USER_HAS_GAP`` and ``USER_BASE``, where
+the user's parameters ``q`` start in the packed vector. An ``n x n`` scratch
+block that receives the Jacobian during a tangent run closes the vector (the
+kernels allocate nothing), so ``q`` ends where that block begins: read from the
+vector's length at run time, so that one engine serves a system whatever the
+number of its parameters.
 
 Impacts of a user system: onsets of ``g < 0`` with the velocity ``-dg/dt``
 (the closing speed) and the corner label "face"; peaks of the contact force
@@ -17,8 +19,6 @@ import numpy as np
 from chaospound.kernels.free import (
     N_BASE,
     USER_BASE,
-    USER_END,
-    USER_JAC,
     user_gap,
     user_jacobian,
     user_rhs,
@@ -32,14 +32,21 @@ USER_HAS_GAP = False  #: bound by the composition
 
 
 @inline
+def _user_end(p):
+    """Where the user's parameters ``q = p[USER_BASE:end]`` end: at the ``n x n``
+    Jacobian scratch block that closes ``p``."""
+    return p.shape[0] - N_BASE * N_BASE
+
+
+@inline
 def model_rhs(t, y, p, ug, vg, out):
-    user_rhs(t, y[:N_BASE], p[USER_BASE:USER_END], out[:N_BASE])
+    user_rhs(t, y[:N_BASE], p[USER_BASE:_user_end(p)], out[:N_BASE])
 
 
 @inline
 def model_rate(t, y, p, y_at):
     if USER_HAS_GAP:
-        _, rate = user_gap(t, y[:N_BASE], p[USER_BASE:USER_END])
+        _, rate = user_gap(t, y[:N_BASE], p[USER_BASE:_user_end(p)])
         return -rate
     return 0.0
 
@@ -48,7 +55,7 @@ def model_rate(t, y, p, y_at):
 def model_ends(t, y, p, out):
     """``(-g, -g, -dg/dt, -dg/dt)``, or ``(-1, -1, 0, 0)`` without a gap function."""
     if USER_HAS_GAP:
-        g, rate = user_gap(t, y[:N_BASE], p[USER_BASE:USER_END])
+        g, rate = user_gap(t, y[:N_BASE], p[USER_BASE:_user_end(p)])
         out[0] = -g
         out[1] = -g
         out[2] = -rate
@@ -90,15 +97,17 @@ def model_trace(p):
 @kernel
 def model_linearize(t, y, p):
     """The user's Jacobian into the scratch block of ``p``; no coefficients."""
-    jac = p[USER_JAC:USER_JAC + N_BASE * N_BASE].reshape((N_BASE, N_BASE))
-    user_jacobian(t, y[:N_BASE], p[USER_BASE:USER_END], jac)
+    end = _user_end(p)
+    jac = p[end:end + N_BASE * N_BASE].reshape((N_BASE, N_BASE))
+    user_jacobian(t, y[:N_BASE], p[USER_BASE:end], jac)
     return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
 @kernel
 def model_jvp(p, lin, v, out):
     """``out = J v`` from the Jacobian :func:`model_linearize` left in ``p``."""
-    jac = p[USER_JAC:USER_JAC + N_BASE * N_BASE].reshape((N_BASE, N_BASE))
+    end = _user_end(p)
+    jac = p[end:end + N_BASE * N_BASE].reshape((N_BASE, N_BASE))
     for i in range(N_BASE):
         acc = 0.0
         for j in range(N_BASE):
