@@ -655,3 +655,19 @@ def test_cli_lyapunov_and_classify_say_which_exponents_are_exact(capsys):
     assert main(["lyapunov", "--preset", "fig4", "--set", "period_ratio=0.9", "--k", "1",
                  "--cycles", "50", "--json", "--quiet"]) == 0
     assert json.loads(capsys.readouterr().out)["floquet"]["periodic"] is False
+
+
+def test_the_wall_branch_costs_the_same_from_either_end(wall_branch):
+    """Started at T/T_Ax = 1.0, where the orbit's state is 5 times larger than at 0.45,
+    the branch passes the same folds and grazing with about as many points: the step
+    cap follows each point's state scale, not the starting orbit's (it took 400 points
+    and stopped short of the lower fold's far side when it was relative to the start)."""
+    smap, forward = wall_branch
+    backward = continue_branch(smap, "period_ratio", 1.0, 0.45)
+    assert len(backward.orbits) <= 1.2 * len(forward.orbits)
+    for kind in ("fold", "grazing"):
+        ours = sorted(sp.value for sp in backward.of_kind(kind))
+        theirs = sorted(sp.value for sp in forward.of_kind(kind))
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-8)
+    values = [o.value for o in backward.orbits]
+    assert min(values) == 0.45 and max(values) == 1.0

@@ -154,7 +154,8 @@ def _add_continue(commands: argparse._SubParsersAction) -> None:
     group.add_argument("--max-steps", type=_count, default=400, metavar="N",
                        help="points per direction (400)")
     group.add_argument("--ds-max", type=_positive_float, default=None, metavar="DS",
-                       help="largest pseudo-arclength step (default from the interval)")
+                       help="largest pseudo-arclength step (default: a tenth of the interval "
+                            "per unit of each point's state scale)")
     group.add_argument("--switch", action="store_true",
                        help="also continue the period-2K branch of every period doubling")
     out = parser.add_argument_group("output")

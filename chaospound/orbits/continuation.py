@@ -13,7 +13,8 @@ parameter. The branch is the solution curve of G(x, lambda) = P^k(x; lambda) - x
   |G|_inf <= tol * max(1, |x|_inf);
 * step control: ds halved on a failed corrector or a turn of more than
   ``max_turn`` between consecutive tangents, grown by 1.5 after a corrector
-  that converged in at most 2 iterations, kept in [ds_min, ds_max]; the run
+  that converged in at most 2 iterations, kept in [ds_min, ds_max] (by
+  default ds_max grows with the current point's state scale); the run
   stops after ``max_steps`` points, below ds_min, or on the parameter
   interval's edge (the last point is solved at the edge's value).
 
@@ -452,11 +453,10 @@ def _clearance_changes_sign(a: _Point, b: _Point) -> bool:
 # ------------------------------------------------------------------- driver
 def _run_direction(base: StroboscopicMap, start: _Point, t0: np.ndarray, k: int,
                    lo: float, hi: float, *, ds: float, ds_min: float, ds_max: float,
-                   max_steps: int, tol: float, detect: bool, locate: bool,
+                   per_scale: bool, max_steps: int, tol: float, detect: bool, locate: bool,
                    locate_tol: float, max_turn: float,
                    progress: Callable[[str], None] | None):
     points, tangents, specials = [start], [t0], []
-    scale0 = state_scale(start.x)
     cos_turn = np.cos(np.radians(max_turn))
     while len(points) < max_steps:
         a, t_a = points[-1], tangents[-1]
@@ -497,7 +497,7 @@ def _run_direction(base: StroboscopicMap, start: _Point, t0: np.ndarray, k: int,
         points.append(b)
         tangents.append(t_b)
         if b.iterations <= 3:
-            ds = min(ds * 1.5, ds_max * max(1.0, state_scale(b.x) / scale0))
+            ds = min(ds * 1.5, ds_max * state_scale(b.x) if per_scale else ds_max)
         if progress is not None:
             progress(f"{base.parameter} = {b.lam:.6g}, {len(points)} points, ds = {ds:.3g}")
     else:
@@ -534,7 +534,11 @@ def continue_from(smap: StroboscopicMap, orbit: Orbit, lo: float, hi: float, *,
         Initial directions in the parameter (both by default).
     ds, ds_min, ds_max : float, optional
         Initial, smallest and largest pseudo-arclength steps (in the units of
-        (x, lambda)); defaults from the interval and the state scale.
+        (x, lambda)). By default the largest step is 0.1 max(width, 0.05) per
+        unit of the current point's state scale (max(1, |x|_inf)): a branch
+        whose amplitude grows takes longer steps, whichever end it starts
+        from; a given ``ds_max`` is a fixed cap. The others default from the
+        interval and the starting orbit's scale.
     max_steps : int
         Points per direction.
     tol : float
@@ -553,8 +557,11 @@ def continue_from(smap: StroboscopicMap, orbit: Orbit, lo: float, hi: float, *,
     width = hi - lo
     scale = state_scale(orbit.state)
     ds = 0.02 * max(width, 0.05 * scale) if ds is None else ds
-    ds_max = 0.1 * max(width, 0.05 * scale) if ds_max is None else ds_max
-    ds_min = 1e-7 * ds_max if ds_min is None else ds_min
+    if ds_min is None:
+        ds_min = 1e-7 * (0.1 * max(width, 0.05 * scale) if ds_max is None else ds_max)
+    per_scale = ds_max is None
+    if per_scale:
+        ds_max = 0.1 * max(width, 0.05)  # per unit of state scale
     base = smap.with_parameter(value=lam0)
     start = _Point(base, orbit.state.copy(), lam0, orbit.monodromy,
                    base.parameter_derivative(orbit.state, k), orbit.residual, orbit.iterations,
@@ -567,8 +574,9 @@ def continue_from(smap: StroboscopicMap, orbit: Orbit, lo: float, hi: float, *,
         else:
             t0 = _initial_tangent(start, direction)
         runs.append(_run_direction(base, start, t0, k, lo, hi, ds=ds, ds_min=ds_min,
-                                   ds_max=ds_max, max_steps=max_steps, tol=tol, detect=detect,
-                                   locate=locate, locate_tol=locate_tol, max_turn=max_turn,
+                                   ds_max=ds_max, per_scale=per_scale, max_steps=max_steps,
+                                   tol=tol, detect=detect, locate=locate,
+                                   locate_tol=locate_tol, max_turn=max_turn,
                                    progress=progress))
     orbits: list[Orbit] = []
     special: list[SpecialPoint] = []
