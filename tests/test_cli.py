@@ -641,16 +641,3 @@ def test_sweep_says_when_the_grid_overrides_a_set(tmp_path):
     lines = proc.stderr.splitlines()
     assert len(lines) == 1 and "overrides --set gap=2" in lines[0], proc.stderr
     assert path.exists()
-
-
-def test_a_set_is_named_after_the_description_it_may_contradict(capsys):
-    """fig3a's description names its regime at T/T_Ax = 0.70; after --set it says what
-    changed, and run options alone (--record) leave it as the preset's."""
-    preset = run_json(capsys, "--preset", "fig3a", *SHORT)["scene"]["description"]
-    changed = run_json(capsys, "--preset", "fig3a", "--set", "period_ratio=0.9",
-                       "--set", "gap = 0.6", *SHORT)["scene"]
-    assert changed["description"] == f"{preset}; then --set period_ratio=0.9, gap = 0.6"
-    assert changed["period_ratio"] == 0.9
-    code, out, _ = run(capsys, "simulate", "--preset", "fig3a", "--set", "period_ratio=0.9",
-                       *SHORT)
-    assert code == 0 and "then --set period_ratio=0.9" in out.splitlines()[0]

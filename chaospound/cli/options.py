@@ -5,7 +5,6 @@ output options, the argparse types, and the engine a target's runs use."""
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import os
 from collections.abc import Sequence
@@ -129,14 +128,7 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
         if getattr(args, name, None) is not None
     ]
     assignments = list(args.assignments) + overrides
-    if not assignments:
-        return scene
-    changed = scene.with_assignments(assignments)
-    if args.assignments:  # the file's description may no longer hold: say what changed
-        history = ", ".join(" ".join(str(item).split()) for item in args.assignments)
-        before = f"{changed.description}; then" if changed.description else "then"
-        changed = dataclasses.replace(changed, description=f"{before} --set {history}")
-    return changed
+    return scene.with_assignments(assignments) if assignments else scene
 
 
 #: run and solver settings of a System that --set may change (name -> parser)
