@@ -1216,6 +1216,24 @@ class Scene:
             flat[name] = value.strip()
         return self.with_params(**flat)
 
+    def physical_changes(self, other: Scene) -> dict[str, tuple[object, object]]:
+        """The physical parameters in which this scene differs from ``other``.
+
+        Parameters
+        ----------
+        other : Scene
+            E.g. the preset this scene was made from.
+
+        Returns
+        -------
+        dict
+            Flat name -> (other's value, this scene's value), resolved, in the
+            order of :data:`PARAMETERS`; solver and run settings are left out.
+        """
+        return {name: (other._resolved(name), self._resolved(name)) for name in PARAMETERS
+                if _TARGET[name][0] not in ("solver", "run")
+                and other._resolved(name) != self._resolved(name)}
+
     # -------------------------------------------------------------- export
     def to_dict(self) -> dict[str, object]:
         """Every flat parameter, resolved, plus derived values (JSON-serialisable).

@@ -641,3 +641,18 @@ def test_sweep_says_when_the_grid_overrides_a_set(tmp_path):
     lines = proc.stderr.splitlines()
     assert len(lines) == 1 and "overrides --set gap=2" in lines[0], proc.stderr
     assert path.exists()
+
+
+def test_a_report_says_what_set_changed_from_the_preset(capsys):
+    """fig3a's description names its regime at T/T_Ax = 0.70: after --set, the report's
+    scene row says what changed from the preset; run and solver options are not physics.
+    The scene itself (its JSON, a store's record) keeps the preset's description."""
+    code, out, _ = run(capsys, "simulate", "--preset", "fig3a", "--set", "period_ratio=0.9",
+                       "--set", "gap=0.6", "--method", "dop853", *SHORT)
+    first = out.splitlines()[0]
+    assert code == 0 and first.endswith("; changed from the preset: period_ratio 0.7 -> 0.9, "
+                                        "gap 1 -> 0.6"), first
+    code, out, _ = run(capsys, "simulate", "--preset", "fig3a", "--method", "dop853", *SHORT)
+    assert code == 0 and "changed" not in out.splitlines()[0]
+    doc = run_json(capsys, "--preset", "fig3a", "--set", "period_ratio=0.9", *SHORT)
+    assert doc["scene"]["description"] == load_preset("fig3a").description

@@ -28,7 +28,23 @@ def _system_document(system) -> dict:
 
 
 def _scene_title(scene) -> str:
-    return f"{scene.name}: {scene.description}" if scene.description else scene.name
+    """``name: description``, and for a scene named after a preset whose physics was
+    changed (``--set``), what changed: the preset's description may no longer hold."""
+    from chaospound.scene import list_presets, load_preset
+
+    title = f"{scene.name}: {scene.description}" if scene.description else scene.name
+    if scene.name not in list_presets():
+        return title
+    changes = scene.physical_changes(load_preset(scene.name))
+    if not changes:
+        return title
+    text = ", ".join(f"{name} {_value(old)} -> {_value(new)}"
+                     for name, (old, new) in changes.items())
+    return f"{title}; changed from the preset: {text}"
+
+
+def _value(value) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _solver_text(solver) -> str:
