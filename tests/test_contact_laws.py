@@ -515,13 +515,15 @@ def test_free_impact_independent_of_integrator():
 
 # ------------------------------------------------------------ energy balance
 
-def wall_run(name: str, e: float, impacts: int, k_s: float = 1.0, mass: float = 1.0):
+def wall_run(name: str, e: float, impacts: int, k_s: float = 1.0, mass: float = 1.0,
+             rtol: float = 1e-12):
     """A mass on a spring pounding a wall at its rest position (no damping, no ground).
 
     ``m x'' = -k_s x - F(x, x')``; the state carries ``W``, the work of the
     contact's damping part ``F - F_elastic`` (``W' = (F - F_el) x'``). Each
     episode is integrated on its own (terminal events at d = 0 in the expected
-    direction), the onset writing the law's memory.
+    direction), the onset writing the law's memory, by scipy's DOP853 at ``rtol``
+    (``atol = 1e-3 rtol``).
 
     Returns
     -------
@@ -555,8 +557,8 @@ def wall_run(name: str, e: float, impacts: int, k_s: float = 1.0, mass: float = 
         y[0] = 1e-300
         for direction in (-1, 1):  # in contact until d falls to 0, then free until it rises
             crossing.direction = direction
-            sol = solve_ivp(rhs, (t, t + 1e3), y, method="DOP853", rtol=1e-12, atol=1e-15,
-                            events=crossing)
+            sol = solve_ivp(rhs, (t, t + 1e3), y, method="DOP853", rtol=rtol,
+                            atol=1e-3 * rtol, events=crossing)
             t = float(sol.t_events[0][0])
             y = np.array(sol.y_events[0][0])
             y[0] = -1e-300 if direction == -1 else 0.0
@@ -575,8 +577,12 @@ def test_energy_balance(name):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(DAMPED))
 def test_energy_balance_100_impacts(name):
-    """The same over 100 impacts (issue 15), e = 0.95."""
-    worst, energies = wall_run(name, 0.95, 100)
+    """The same over 100 impacts (issue 15), e = 0.95. The reference runs at rtol 1e-13:
+    the no-pull variant's force has a kink inside each episode (where it would pull, it
+    is clamped to 0) that scipy steps across without an event, and its error adds up
+    over the episodes (1.2e-8 after 100 at rtol 1e-12, 9e-10 at 1e-13, 3e-11 at 3e-14:
+    the reference's error, not the law's)."""
+    worst, energies = wall_run(name, 0.95, 100, rtol=1e-13)
     assert worst < 1e-8
     assert energies[-1] < 0.1 * energies[0]
 
