@@ -72,9 +72,8 @@ class _LinkOnlyLibrary(JITCodeLibrary):
     links the model, ...): the one full pipeline that optimises the loop's module,
     all of them linked in, does that work once, as a C compiler optimises one
     translation unit. Without fast-math flags LLVM's optimisations keep IEEE
-    arithmetic, so the results are bitwise the same (benchmarks/golden.py); the
-    machine code runs as fast (benchmarks/bench_versus.py), and an engine compiles
-    about 0.3 s sooner of its 1.7 s in LLVM.
+    arithmetic, so the results are bitwise the same (benchmarks/golden.py); what it
+    saves and costs is measured in docs/design/engine.md, section 6.3.
     This and the two classes below override numba internals (checked by
     :data:`_LINK_ONLY`; tests/test_compose.py checks the effect): with a numba
     that lacks them, internal kernels compile as before, machine code and all.
