@@ -3,9 +3,9 @@
 The sweep engine (:mod:`chaospound.sweep`) cuts the grid into tasks of whole
 chunks of points (or segments of continuation chains); this backend submits
 them to a Dask scheduler instead of local processes, while the client keeps
-writing results into the same HDF5 store in the same order, so the file is
-identical to the local backend's whatever the number of workers and the order
-of completion.
+committing results to the same store (its journal, keyed by grid index), so the
+file is identical to the local backend's whatever the number of workers and
+the order of completion.
 
 * The scene and the sweep definition travel once: they are the result of one
   small task (the "payload") that every sweep task depends on, so a worker
@@ -14,7 +14,8 @@ of completion.
   is recomputed by the scheduler if every worker holding it dies.
 * Tasks are pure functions of their inputs; a worker that dies has its tasks
   rerun elsewhere by the scheduler (``retries`` more on errors), and results
-  are written once, by the client, in order, so no point is lost or doubled.
+  are committed once, by the client, keyed by their grid index, so no point is
+  lost or doubled.
 * If the scheduler goes away the sweep stops with :class:`ClusterUnavailable`,
   the file keeps every point written so far, and ``--resume`` (on Dask or
   locally) finishes it.

@@ -18,10 +18,12 @@ Branches and chains
 
 Determinism
     A point's result depends only on its parameters and its starting state,
-    never on the worker that ran it; results are written in the branch's
-    visiting order (out-of-order arrivals wait in a small buffer), so files
-    from 1 or N workers, or from an interrupted and resumed run, are
-    identical apart from the timing fields.
+    never on the worker that ran it; results are committed to the sweep's
+    journal as they arrive, each keyed by its grid index, and the file is
+    written from the journal in the branch's visiting order, so files from 1
+    or N workers, or from an interrupted and resumed run, are identical apart
+    from the timing fields. (What an interrupted fresh branch holds need not
+    be its first points; a continuation chain's are always its first.)
 
 Interruption
     Finished points are committed to the file in batches (every
