@@ -38,8 +38,10 @@ def _scene_title(scene) -> str:
     changes = scene.physical_changes(load_preset(scene.name))
     if not changes:
         return title
-    text = ", ".join(f"{name} {_value(old)} -> {_value(new)}"
-                     for name, (old, new) in changes.items())
+    items = [f"{name} {_value(old)} -> {_value(new)}" for name, (old, new) in changes.items()]
+    shown = 4  # the row stays one readable line
+    text = ", ".join(items[:shown]) + (f" and {len(items) - shown} more"
+                                       if len(items) > shown else "")
     return f"{title}; changed from the preset: {text}"
 
 
