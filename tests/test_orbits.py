@@ -671,3 +671,17 @@ def test_the_wall_branch_costs_the_same_from_either_end(wall_branch):
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-8)
     values = [o.value for o in backward.orbits]
     assert min(values) == 0.45 and max(values) == 1.0
+
+
+def test_a_given_ds_max_is_a_fixed_cap(wall_branch):
+    """--ds-max caps every pseudo-arclength step, whatever the state's scale (a corrected
+    point lies on the hyperplane through the predicted one, so its distance from the
+    previous point exceeds the step by the correction only)."""
+    smap, _ = wall_branch
+    cap = 0.05
+    branch = continue_branch(smap, "period_ratio", 1.0, 0.55, ds_max=cap, both=False,
+                             max_steps=40)
+    y = np.array([np.append(o.state, o.value) for o in branch.orbits])
+    steps = np.linalg.norm(np.diff(y, axis=0), axis=1)
+    assert steps.size > 10 and steps.max() <= 1.01 * cap
+    assert max(abs(o.state).max() for o in branch.orbits) > 5  # where the old cap grew
