@@ -1230,9 +1230,9 @@ class Scene:
             Flat name -> (other's value, this scene's value), resolved, in the
             order of :data:`PARAMETERS`; solver and run settings are left out.
         """
-        return {name: (other._resolved(name), self._resolved(name)) for name in PARAMETERS
-                if _TARGET[name][0] not in ("solver", "run")
-                and other._resolved(name) != self._resolved(name)}
+        pairs = {name: (other._resolved(name), self._resolved(name)) for name in PARAMETERS
+                 if _TARGET[name][0] not in ("solver", "run")}
+        return {name: pair for name, pair in pairs.items() if pair[0] != pair[1]}
 
     # -------------------------------------------------------------- export
     def to_dict(self) -> dict[str, object]:
