@@ -633,6 +633,28 @@ def test_laws_with_memory_or_jumps_have_exact_floquet_exponents(law):
     assert np.linalg.norm(forward - predicted) < 1e-4 * np.linalg.norm(predicted)
 
 
+def test_minimal_period_tells_a_doubled_solve_from_a_doubled_orbit():
+    """Newton on P^2(x) = x from a period-1 orbit converges to it (the wall at gap 5,
+    T/T_Ax 1.0: periodic 1-1): its sections repeat after 1 cycle, which
+    minimal_period finds and response_floquet reports (the orbit does not confirm a
+    period-2 response). fig4 at T/T_Ax 0.95 responds on a stable period-2 orbit, whose
+    sections 1 cycle apart differ."""
+    from chaospound.orbits.shooting import minimal_period
+
+    smap = StroboscopicMap.of(WALL_GAP5.with_params(period_ratio=1.0))
+    one = find_orbit(smap, period=1, transient=300)
+    x, m, _, _ = newton_fixed_point(smap, one.state, 2)
+    assert minimal_period(smap, x, 2) == 1 and minimal_period(smap, x, 4) == 1
+    report = response_floquet(WALL_GAP5.with_params(period_ratio=1.0), x, 2)
+    assert report.found and report.stable and report.minimal_period == 1
+    assert not report.confirmed and "repeats after 1 cycles, not 2" in report.note
+    scene = load_preset("fig4").with_params(period_ratio=0.95)
+    two_map = StroboscopicMap.of(scene)
+    two = find_orbit(two_map, period=2, transient=300)
+    assert minimal_period(two_map, two.state, 2) == 2
+    assert response_floquet(scene, two.state, 2).minimal_period == 2
+
+
 def test_cli_lyapunov_and_classify_say_which_exponents_are_exact(capsys):
     """`chaospound lyapunov` prints the exact Floquet exponents of a periodic response
     beside the QR estimates (and says which are exact); `classify` reports the exact

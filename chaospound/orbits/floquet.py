@@ -46,7 +46,7 @@ import numpy as np
 from ..dynamics.system import SimulationError, System, as_system
 from ..scene import Scene
 from .maps import ORBIT_METHOD, StroboscopicMap, finite_difference_monodromy, state_scale
-from .shooting import Orbit, OrbitNotFound, newton_fixed_point, orbit_at
+from .shooting import Orbit, OrbitNotFound, minimal_period, newton_fixed_point, orbit_at
 
 __all__ = ["FloquetReport", "detect_period", "response_floquet", "spectrum_floquet"]
 
@@ -112,6 +112,11 @@ class FloquetReport:
         Why a fallback was used, why the orbit does not confirm the response,
         or why Newton failed.
     orbit : Orbit or None
+    minimal_period : int
+        The orbit's own period in forcing cycles, a divisor of ``period``
+        (:func:`~chaospound.orbits.shooting.minimal_period`): smaller where Newton found
+        a shorter orbit (the response then still approaches it, and the orbit does not
+        confirm it); 0 when not found.
     """
 
     period: int
@@ -128,6 +133,7 @@ class FloquetReport:
     distance: float = float("nan")
     note: str = ""
     orbit: Orbit | None = None
+    minimal_period: int = 0
 
     @property
     def max_exponent(self) -> float | None:
@@ -153,6 +159,7 @@ class FloquetReport:
             "residual": float(self.residual),
             "iterations": int(self.iterations),
             "distance": float(self.distance),
+            "minimal_period": int(self.minimal_period),
             "note": self.note,
         }
 
@@ -265,6 +272,10 @@ def response_floquet(system_or_scene: System | Scene, state: np.ndarray, period:
                        f"response's {' '.join(corner_sequence)}")
     if not orbit.stable:
         reasons.append(f"the orbit is unstable (max |mu| = {abs(orbit.multipliers[0]):.6g})")
+    shortest = minimal_period(smap, x, k)
+    if shortest < k:
+        reasons.append(f"the orbit repeats after {shortest} cycles, not {k}: the response "
+                       "still approaches it")
     confirmed = not reasons
     valid = True
     if method == "finite-difference" and _memory_law(system) and \
@@ -279,7 +290,7 @@ def response_floquet(system_or_scene: System | Scene, state: np.ndarray, period:
                          method=method, exact=confirmed and valid, confirmed=confirmed,
                          stable=orbit.stable, residual=orbit.residual,
                          iterations=orbit.iterations, distance=distance,
-                         note="; ".join(notes), orbit=orbit)
+                         note="; ".join(notes), orbit=orbit, minimal_period=shortest)
 
 
 def detect_period(system_or_scene: System | Scene, state: np.ndarray, *, max_period: int = 16,

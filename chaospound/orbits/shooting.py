@@ -25,10 +25,15 @@ from ..physics.corners import CORNER_LABELS
 from ..scene import Scene
 from .maps import StroboscopicMap, state_scale
 
-__all__ = ["Orbit", "OrbitNotFound", "find_orbit", "newton_fixed_point", "orbit_at",
-           "orbit_trajectory"]
+__all__ = ["Orbit", "OrbitNotFound", "find_orbit", "minimal_period", "newton_fixed_point",
+           "orbit_at", "orbit_trajectory"]
 
 ORBIT_TOL = 1e-10  #: default residual, relative to max(1, |x|_inf)
+#: a fixed point of P^k repeats after d | k cycles when its sections d apart agree to
+#: this, relative to max(1, |x|_inf): far above an orbit's residual (1e-10), far below
+#: the spread of a period-doubled orbit's sections except right at its doubling (the
+#: spread grows as the square root of the distance from it)
+MINIMAL_PERIOD_TOL = 1e-7
 
 
 class OrbitNotFound(SimulationError):
@@ -272,6 +277,47 @@ def orbit_at(smap: StroboscopicMap, x: np.ndarray, k: int, m: np.ndarray, residu
                  state_names=tuple(system.state_names), multipliers=mu, monodromy=m,
                  impact_velocity=velocity, impact_phase=phase, impact_cycle=cycle,
                  corners=corners, residual=float(residual), iterations=int(iterations))
+
+
+def minimal_period(smap: StroboscopicMap, x: np.ndarray, k: int,
+                   tol: float = MINIMAL_PERIOD_TOL) -> int:
+    """The smallest d dividing k with P^d(x) = x, for a fixed point x of P^k.
+
+    Newton's method on P^k(x) = x converges to any orbit whose period divides k: from
+    the slow approach to a period-1 orbit whose multiplier is near -1, whose sections
+    alternate for hundreds of cycles and so look period-2, it finds the period-1
+    orbit. This tells which.
+
+    Parameters
+    ----------
+    smap : StroboscopicMap
+        The map (its system and tolerances run the k cycles).
+    x : ndarray (n,)
+        A fixed point of P^k (model units).
+    k : int
+        Its period as solved, in forcing cycles.
+    tol : float
+        Sections d apart agree when their largest difference is at most ``tol``
+        times max(1, |x|_inf).
+
+    Returns
+    -------
+    int
+        d, the orbit's period in forcing cycles (k when no proper divisor repeats).
+    """
+    from ..simulate import simulate
+
+    k = int(k)
+    divisors = [d for d in range(1, k) if k % d == 0]
+    if not divisors:
+        return k
+    sections = simulate(smap.system, transient=0, record=max(divisors), initial_state=x,
+                        start_at_section=True).strobe.state
+    scale = state_scale(x)
+    for d in divisors:
+        if float(np.max(np.abs(sections[d] - sections[0]))) <= tol * scale:
+            return d
+    return k
 
 
 def orbit_impacts(smap: StroboscopicMap, x: np.ndarray, k: int):
