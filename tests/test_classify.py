@@ -475,6 +475,39 @@ def test_a_slow_approach_to_a_stable_orbit_is_periodic_not_a_torus():
     assert len(tight.impacts) == 3 * 19
 
 
+def test_a_slow_alternating_approach_to_a_period_1_orbit_is_period_1():
+    """fig4 at T/T_Ax 0.4497 (a point of the 1000-point scan), just before a period
+    doubling: the period-1 orbit's multiplier is -0.9946, so the sections alternate
+    about it while they close in, and after 900 cycles they repeat at P = 2 within
+    tol / 10 but not at P = 1 (rule 3 reads group-periodic 4-2). Newton at P = 2 lands
+    on the period-1 orbit, which rule 8b names. Checked without Newton: a plain run of
+    3000 cycles at rtol 1e-11 from where the record ends repeats at P = 1."""
+    from chaospound.cli.classify import _classify_report
+    from chaospound.simulate import simulate
+
+    scene = load_preset("fig4").with_params(period_ratio=0.44974974974974974)
+    regime = classify(scene)
+    assert regime.label == "group-periodic 2-1"
+    assert regime.evidence["reached_by"] == "newton"
+    approach = regime.evidence["approach"]
+    assert approach["label"] == "group-periodic 4-2" and approach["orbit_period"] == 1
+    assert regime.floquet_exact
+    assert 0.99 < max(abs(z) for z in regime.floquet_multipliers) < 1.0
+    assert "found an orbit of period 1" in _classify_report(scene, regime, None)
+    # independent of Newton: the approach, run on, repeats at P = 1
+    loose = simulate(scene.with_params(rtol=1e-8, atol=1e-10), transient=900, record=1)
+    tight = simulate(scene.with_params(rtol=1e-11, atol=1e-13), transient=3000, record=8,
+                     initial_state=loose.strobe.state[-1], start_at_section=True)
+    states = tight.strobe.state
+    assert _mismatch(states, 1, _scale(states)) < 0.1 * DEFAULT_TOL
+    assert len(tight.impacts) == 2 * 8
+    # and 900 cycles are not enough for it: P = 2 repeats there, P = 1 does not
+    early = simulate(scene.with_params(rtol=1e-8, atol=1e-10), transient=880, record=20)
+    s = early.strobe.state
+    assert _mismatch(s, 1, _scale(s)) > 10 * DEFAULT_TOL
+    assert _mismatch(s, 2, _scale(s)) < 0.2 * DEFAULT_TOL
+
+
 def test_a_torus_near_a_resonance_stays_a_torus():
     """fig4 at T/T_Ax 1.0539, a torus (tests/test_converged.py): its sections come
     within 1e-2 of period 5, so rule 6b tries Newton there, and finds no orbit that

@@ -206,15 +206,20 @@ def _classify_report(scene: Scene, regime, plot: str | None) -> str:
         ("solver", f"{solver.method}, {accuracy}"),
         ("wall time", f"{_command_seconds():.3g} s the whole command"),
     ]  # fmt: skip
-    if evidence.get("reached_by") == "newton":  # rule 6b
+    if evidence.get("reached_by") == "newton":
         approach = evidence["approach"]
-        rows.insert(rows.index(("confidence", f"{regime.confidence:.2f}")), (
-            "reached by",
-            f"Newton at P = {approach['period']}: the record closed in on the orbit "
-            f"({approach['distance_first_quarter']:.2g} -> "
-            f"{approach['distance_last_quarter']:.2g} of the scale over "
-            f"{approach['sections']} sections; Newton and the window at 1e-3 times the "
-            f"rtol); rule 6 alone said {approach['label']}"))
+        if "orbit_period" in approach:  # rule 8b
+            how = (f"Newton at P = {approach['period']} found an orbit of period "
+                   f"{approach['orbit_period']}, {approach['distance']:.2g} of the scale from "
+                   f"the record, which still approached it; the window alone said "
+                   f"{approach['label']}")
+        else:  # rule 6b
+            how = (f"Newton at P = {approach['period']}: the record closed in on the orbit "
+                   f"({approach['distance_first_quarter']:.2g} -> "
+                   f"{approach['distance_last_quarter']:.2g} of the scale over "
+                   f"{approach['sections']} sections; Newton and the window at 1e-3 times "
+                   f"the rtol); rule 6 alone said {approach['label']}")
+        rows.insert(rows.index(("confidence", f"{regime.confidence:.2f}")), ("reached by", how))
     if plot is not None:
         rows.append(("wrote", plot))
     return _table(None, rows, "ll") + "\n"

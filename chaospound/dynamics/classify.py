@@ -91,6 +91,10 @@ The rules, in the order :func:`classify` applies them (the same text is in
    orbit confirms the response when Newton stays within 1e-3 of the state scale
    of the start, with the same impacts per period and corners, all |mu| < 1.
    A failed Newton leaves the label as it is and the evidence says why.
+   8b: a stable orbit near the start that repeats after fewer cycles than P
+   (:func:`chaospound.orbits.shooting.minimal_period`; near a period doubling the
+   sections alternate about a period-1 orbit for hundreds of cycles) is the
+   attractor, read from a window at its state as in 6b.
 
 Confidence, in [0, 1]: periodic and group-periodic
 ``log10(tol / mismatch) / 2`` (1 at a mismatch 100 times below tol, 0 at
@@ -392,7 +396,19 @@ def classify(
     }
     if regime.regime in ("periodic", "group-periodic") and floquet:
         report(f"{regime.label}: solving the orbit for its Floquet exponents")
-        regime = _with_floquet(regime, system, record.strobe.state[-1])
+        regime, orbit = _with_floquet(regime, system, record.strobe.state[-1])
+        shorter = _shorter_orbit(orbit)
+        if shorter is not None:
+            # 8b. Newton's orbit repeats after fewer cycles: the record still approaches it
+            report(f"{regime.label}: the orbit repeats after {orbit.minimal_period} cycles")
+            reached = _orbit_regime(_orbit_system(scene), system, shorter, window, weights,
+                                    max_period, tol, section_phase)
+            if reached is not None:
+                evidence.update(reached_by="newton", approach={
+                    "period": regime.period_cycles, "label": regime.label,
+                    "orbit_period": orbit.minimal_period, "distance": orbit.distance,
+                    "result": "the record approached a shorter orbit"})
+                regime = reached
     if regime.regime != "unresolved" or not len(imp):
         return replace(regime, transient_used=done, evidence={**regime.evidence, **evidence})
 
@@ -600,10 +616,25 @@ def _orbit_regime(scene: System, system: System, state: np.ndarray, window: int,
         imp.velocity, imp.labels, max_period=max_period, tol=tol, test01=False)
     if regime.regime not in ("periodic", "group-periodic"):
         return None
-    return _with_floquet(regime, system, record.strobe.state[-1])
+    return _with_floquet(regime, system, record.strobe.state[-1])[0]
 
 
-def _with_floquet(regime: Regime, system: System, state: np.ndarray) -> Regime:
+def _shorter_orbit(floquet) -> np.ndarray | None:
+    """Rule 8b: the state of a stable orbit near the response that repeats after fewer
+    cycles than the response's period, or None. Near a period doubling (a multiplier
+    near -1) the sections approach a period-1 orbit alternating about it, and look
+    period-2 for hundreds of cycles (fig4 at T/T_Ax 0.4497: |mu| = 0.9946, the period-2
+    mismatch below tol after 900 cycles, the period-1 one not before 2000)."""
+    from ..orbits.floquet import CONFIRM_DISTANCE
+
+    if (floquet is None or not floquet.found or not floquet.stable
+            or not 0 < floquet.minimal_period < floquet.period
+            or not floquet.distance <= CONFIRM_DISTANCE):
+        return None
+    return floquet.orbit.state
+
+
+def _with_floquet(regime: Regime, system: System, state: np.ndarray):
     """Rule 8: the periodic response's orbit by Newton shooting, its Floquet exponents.
 
     Newton starts from the last section of the record window (``state``, in the
@@ -612,6 +643,9 @@ def _with_floquet(regime: Regime, system: System, state: np.ndarray) -> Regime:
     the start, same impacts and corners, all |mu| < 1) raises the confidence to
     1; one that contradicts the response caps it at 0.5; a failed Newton leaves
     it and says why.
+
+    Returns ``(regime, report)``: the report
+    (:class:`~chaospound.orbits.floquet.FloquetReport`) is None where the solve raised.
     """
     from ..orbits.floquet import response_floquet
     from .system import SimulationError
@@ -622,15 +656,15 @@ def _with_floquet(regime: Regime, system: System, state: np.ndarray) -> Regime:
                                    corner_sequence=tuple(regime.corner_sequence))
     except (SimulationError, ValueError, np.linalg.LinAlgError) as exc:
         return replace(regime, evidence={**regime.evidence, "floquet": {
-            "found": False, "exact": False, "note": f"no orbit: {exc}"}})
+            "found": False, "exact": False, "note": f"no orbit: {exc}"}}), None
     evidence = {**regime.evidence, "floquet": floquet.to_json_dict()}
     if not floquet.found:
-        return replace(regime, evidence=evidence)
+        return replace(regime, evidence=evidence), floquet
     confidence = 1.0 if floquet.confirmed else min(regime.confidence, CONTRADICTED_CONFIDENCE)
     return replace(regime, confidence=confidence, evidence=evidence,
                    floquet_exponents=tuple(float(e) for e in floquet.exponents),
                    floquet_multipliers=tuple(complex(z) for z in floquet.multipliers),
-                   floquet_exact=floquet.exact)
+                   floquet_exact=floquet.exact), floquet
 
 
 # ====================================================== classify_sequence
