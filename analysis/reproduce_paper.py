@@ -1075,6 +1075,13 @@ def table_head(*cells) -> str:
     return table_row(*cells) + "\n" + table_row(*["---"] * len(cells))
 
 
+def _duration(seconds: float) -> str:
+    """A wall time for the report: whole minutes from 2 minutes up, else seconds."""
+    if not seconds == seconds:  # nan
+        return "n/a"
+    return f"{seconds / 60:.0f} minutes" if seconds >= 120 else f"{seconds:.0f} s"
+
+
 def readme_values(c: dict) -> dict[str, str]:
     """Every number of results/README.md, formatted, by name."""
     win, chaos, vel = c["windows"], c["chaos"], c["velocities"]
@@ -1171,7 +1178,7 @@ def readme_values(c: dict) -> dict[str, str]:
         "ecc_p99": num(-ecc["window_1000"]["p99"], ".0f"),
         "ecc_adaptive": num(-ecc["adaptive"]["max"], ".0f"),
         "ecc_max": num(-ecc["window_1000"]["max"], ".0f"),
-        "idle_minutes": num(run.get("cpu_s", float("nan")) / max(run["workers"], 1) / 60, ".0f"),
+        "idle_wall": _duration(run.get("cpu_s", float("nan")) / max(run["workers"], 1)),
         "tor_aperiodic": pct(tw.get("aperiodic_fraction")),
         "tor_lambda": pct(tw.get("lambda_positive_fraction")),
         "tor_adaptive": pct(ta.get("chaotic_fraction")),
@@ -1252,7 +1259,7 @@ this file is written by one command:
 
 Last full run: {wall} s wall with {workers} workers and {cpu} s of CPU
 ({stages}). The machine was shared (load average {load} at the end), so the
-CPU time is the better measure: about {idle_minutes} minutes of wall time on {workers} idle cores.
+CPU time is the better measure: about {idle_wall} of wall time on {workers} idle cores.
 The quick mode (`tests/test_reproduction.py`) takes about 20 s with compiled
 kernels and about 55 s when numba has to compile them first (measured with an
 empty NUMBA_CACHE_DIR: 38 s of it is compilation).
