@@ -655,6 +655,20 @@ def test_minimal_period_tells_a_doubled_solve_from_a_doubled_orbit():
     assert response_floquet(scene, two.state, 2).minimal_period == 2
 
 
+def test_cli_orbit_says_when_a_period_k_solve_found_a_shorter_orbit(capsys):
+    """`chaospound orbit --period 2` on the wall's period-1 orbit: the report says
+    it repeats after 1 cycle, and the JSON gives minimal_period; a period-1 solve
+    has no such note."""
+    wall = ["--preset", "wall", "--set", "gap=5", "--set", "period_ratio=1.0", "--quiet"]
+    assert main(["orbit", *wall, "--period", "2"]) == 0
+    assert "note: the orbit repeats after 1 cycle:" in capsys.readouterr().out
+    assert main(["orbit", *wall, "--period", "2", "--json"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["period_cycles"] == 2 and document["minimal_period"] == 1
+    assert main(["orbit", *wall]) == 0
+    assert "note:" not in capsys.readouterr().out
+
+
 def test_cli_lyapunov_and_classify_say_which_exponents_are_exact(capsys):
     """`chaospound lyapunov` prints the exact Floquet exponents of a periodic response
     beside the QR estimates (and says which are exact); `classify` reports the exact

@@ -89,7 +89,7 @@ def _add_orbit(commands: argparse._SubParsersAction) -> None:
 
 
 def _cmd_orbit(args: argparse.Namespace) -> int:
-    from chaospound.orbits.shooting import find_orbit
+    from chaospound.orbits.shooting import find_orbit, minimal_period
 
     scene = scene_from_args(args)
     smap = _orbit_map(args, scene)
@@ -98,12 +98,13 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
     with _Status(f"period-{args.period} orbit of {scene.name}: {smap.system.transient} "
                  "transient cycles, then Newton", quiet=args.quiet):
         orbit = find_orbit(smap, period=args.period, tol=args.tol)
+        shortest = minimal_period(smap, orbit.state, orbit.period)
     wall = time.perf_counter() - start
     document = {"scene": scene.to_dict(), "model": smap.system.model_name,
                 "solver": {"method": smap.system.method, "rtol": smap.system.rtol,
                            "atol": smap.system.atol},
                 "transient_cycles": smap.system.transient, **orbit.to_json_dict(),
-                "wall_s": wall}
+                "minimal_period": shortest, "wall_s": wall}
     if args.json:
         _emit(_json_text(_with_units(document)))
         return EXIT_OK
@@ -116,6 +117,11 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
              f"  Newton: {orbit.iterations} iterations, relative residual {orbit.residual:.2e} "
              f"({smap.system.method}, rtol {smap.system.rtol:g}, {smap.system.transient} "
              "transient cycles)", ""]
+    if shortest < orbit.period:
+        lines[-1:-1] = [f"  note: the orbit repeats after {shortest} cycle"
+                        f"{'' if shortest == 1 else 's'}: Newton on the {orbit.period}-fold map "
+                        f"converges to any orbit whose period divides {orbit.period}; this is "
+                        f"the period-{shortest} orbit"]
     rows = [(name, f"{value:.12g}") for name, value in zip(orbit.state_names, orbit.state,
                                                            strict=True)]
     lines += ["section state (t = t0 + j T):", _table(None, rows, "lr"), ""]
