@@ -169,10 +169,14 @@ class BasinMap:
             lines.append(f"  #{a.number} {a.label}: {a.count} points, {100 * a.share:.1f} %")
         if self.failed:
             lines.append(f"  failed: {self.failed} points")
-        lines.append(f"basin entropy S_b = {self.entropy:.4f}, boundary basin entropy "
-                     f"S_bb = {self.boundary_entropy:.4f} ({self.boundary_boxes} of "
-                     f"{self.boxes} boxes of {self.box} cells on a boundary; "
-                     f"ln 2 = {math.log(2):.4f})")
+        if self.boxes == 0:
+            lines.append(f"basin entropy: none (no whole box of {self.box} cells a side "
+                         f"fits the grid of {' x '.join(map(str, self.labels.shape))} cells)")
+        else:
+            lines.append(f"basin entropy S_b = {self.entropy:.4f}, boundary basin entropy "
+                         f"S_bb = {self.boundary_entropy:.4f} ({self.boundary_boxes} of "
+                         f"{self.boxes} boxes of {self.box} cells on a boundary; "
+                         f"ln 2 = {math.log(2):.4f})")
         return "\n".join(lines)
 
 

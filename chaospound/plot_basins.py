@@ -93,9 +93,10 @@ def plot_basins(result: BasinMap, *, state_names=None, fig: Figure | None = None
         handles.append(Patch(facecolor=PENDING_COLOR, edgecolor="0.5", label="pending"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
               frameon=False)
-    ax.set_title(f"{len(result.attractors)} attractor(s); basin entropy "
-                 f"$S_b$ = {result.entropy:.3f}, $S_{{bb}}$ = {result.boundary_entropy:.3f} "
-                 f"({result.box}x{result.box} boxes)", fontsize=9)
+    entropy = (f"basin entropy $S_b$ = {result.entropy:.3f}, $S_{{bb}}$ = "
+               f"{result.boundary_entropy:.3f} ({result.box}x{result.box} boxes)"
+               if result.boxes else f"no basin entropy (grid smaller than a {result.box}-cell box)")
+    ax.set_title(f"{len(result.attractors)} attractor(s); {entropy}", fontsize=9)
     return fig
 
 

@@ -217,6 +217,22 @@ def test_identification_is_exact_on_made_up_grids():
     assert basin_entropy(failed, 5)[0] == 0.0
 
 
+def test_a_grid_smaller_than_a_box_has_no_entropy_and_says_so(tmp_path, capsys):
+    """Three initial conditions on a line: no whole 5-cell box, so no basin entropy
+    (NaN in the result), which the report and the figure say in words."""
+    from chaospound.cli import main
+
+    assert np.isnan(basin_entropy(np.zeros(3, dtype=int), 5)[:2]).all()
+    assert basin_entropy(np.zeros(3, dtype=int), 5)[2:] == (0, 0)
+    figure = tmp_path / "line.png"
+    assert main(["basins", "--preset", "wall", "--set", "gap=5", "--set", "period_ratio=0.75",
+                 "--grid", "X_A=0:1#3", "-o", str(tmp_path / "line.h5"), "--quiet",
+                 "--plot", str(figure)]) == 0
+    out = capsys.readouterr().out
+    assert "basin entropy: none (no whole box of 5 cells a side fits the grid of 3 cells)" in out
+    assert "nan" not in out and figure.stat().st_size > 0
+
+
 def test_bad_axes_are_one_line_errors(tmp_path):
     with pytest.raises(ValueError, match=r"unknown initial-condition axis 'X_B'.*valid: "
                                          r"X_A, dX_A, initial_phase"):
