@@ -681,8 +681,8 @@ def _mean_and_error(blocks: list[float]) -> tuple[float, float]:
     the error, not of the mean). An impact's stretching and the contraction after it
     fall in neighbouring 10-cycle blocks, whose exponents are then anti-correlated:
     their sum telescopes, and ``std / sqrt(N)`` overstates the spread of their mean
-    (fig4 at T/T_Ax 0.4600: 0.0035 from 120 blocks, 0.0012 from 10 batches of 12,
-    where ``classify``'s 10 blocks of 160 cycles give 0.0019). Batches longer than
+    (fig4 at T/T_Ax 0.4600: 0.0035 from 120 blocks, 0.0019 from their 12 batches of
+    10, as ``classify``'s 10 blocks of 160 cycles give). Batches longer than
     that pairing see it cancel; the AR(1) widening of the batch means still guards
     against a slow drift.
     """
