@@ -1077,8 +1077,8 @@ def table_head(*cells) -> str:
 
 def _duration(seconds: float) -> str:
     """A wall time for the report: whole minutes from 2 minutes up, else seconds."""
-    if not seconds == seconds:  # nan
-        return "n/a"
+    if not math.isfinite(seconds):
+        return num(seconds)  # "n/a", as every other missing number of the report
     return f"{seconds / 60:.0f} minutes" if seconds >= 120 else f"{seconds:.0f} s"
 
 
