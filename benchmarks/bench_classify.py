@@ -57,6 +57,12 @@ by regime (each point's own wall time, one worker), and the floor of its chaos w
 budget (the old tree's ``--classify full`` wall time of
 results/bench_classify_baseline.json over 15). Writes results/classify_budget.json.
 
+``bound``: how far 15x is even where the classification gives up its watch and the
+engine wastes nothing: the default sweep of the fig4 scan with and without the chaos
+watch (interleaved), both read against the careful labels stored in the four agreement
+files, and the right-hand side evaluations a step-size controller that never rejects a
+step (and a free event location) could save. Writes results/classify_bound.json.
+
 ``table``: the careful classifier (:func:`~chaospound.dynamics.classify.classify`, its
 defaults) at the T/T_Ax of docs/classification.md's "Measured" table, fig4 and
 fig4-translational; prints the table's rows.
@@ -70,6 +76,7 @@ Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds
      PYTHONPATH=. python benchmarks/bench_classify.py birkhoff
      PYTHONPATH=. python benchmarks/bench_classify.py table
      PYTHONPATH=. python benchmarks/bench_classify.py budget
+     PYTHONPATH=. python benchmarks/bench_classify.py bound
      PYTHONPATH=. python benchmarks/bench_classify.py changes --preset fig4 \
          --old before.h5 --new after.h5 --per-change 16
 """
@@ -243,6 +250,128 @@ def budget(points: int, floor_rtol: float) -> dict:
         "watch_floor": {"rtol": floor_rtol, "cycles": CHAOS_WATCH,
                         "chaotic_points": int(len(chaotic)), "seconds": floor},
         "others_plus_watch_floor_s": others + floor,
+    }
+
+
+def _scan_seconds(scene, spec, tmp: str, name: str) -> tuple[float, str]:
+    """Wall time of the default sweep of ``spec`` (one worker) and its store's path."""
+    path = os.path.join(tmp, name)
+    t0 = time.perf_counter()
+    run_sweep(scene, spec, path, workers=1, progress=False)
+    return time.perf_counter() - t0, path
+
+
+def bound(points: int, rounds: int, samples: list[Path], cycles: int) -> dict:
+    """How far issue 17's 15x is from reach: with the chaos watch, without it, and with
+    an engine that wastes no right-hand side evaluation.
+
+    1. The default sweep of the fig4 scan (``points`` points, one worker) timed with
+       the chaos watch (``CHAOS_WATCH``) and with it off (0), interleaved in
+       ``rounds`` rounds.
+    2. The agreement of both with the careful labels stored in ``samples`` (the
+       agreement files; the careful classifier does not depend on the watch, so it is
+       not run again): every row's point is classified again as the default sweep
+       does, with the watch and without it.
+    3. The engine's waste on the scan's impacting points: from each one's stored final
+       section, ``cycles`` cycles at ``WATCH_RTOL`` and at ``EXPONENT_RTOL``; the
+       right-hand side evaluations made over the method's evaluations per step (dopri5:
+       6) times the accepted steps is
+       what a step-size controller that never rejected a step, and an event location
+       that cost nothing, could save at the same accepted steps (an upper bound: the
+       accepted steps themselves are the tolerance's).
+    """
+    from chaospound.dynamics import converged
+    from chaospound.dynamics.classify import ATOL_PER_RTOL, _with_solver
+    from chaospound.dynamics.system import as_system, evolve
+    from chaospound.engine import tables as kin
+    from chaospound.solvers.tableaux import METHODS
+    from chaospound.store import open_sweep
+
+    watch = converged.CHAOS_WATCH
+    scene = load_preset("fig4")
+    spec = SweepSpec(axes=(parse_axis(f"period_ratio=0.3:2.0#{points}"),))
+    timings = {"watch": [], "no watch": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        run_sweep(scene, SweepSpec(axes=(parse_axis("period_ratio=0.7:0.8#2"),)),
+                  os.path.join(tmp, "warm.h5"), progress=False)
+        counts = {}
+        for r in range(rounds):
+            for mode in ("watch", "no watch"):
+                converged.CHAOS_WATCH = watch if mode == "watch" else 0
+                try:
+                    seconds, path = _scan_seconds(scene, spec, tmp, f"{mode}{r}.h5")
+                finally:
+                    converged.CHAOS_WATCH = watch
+                timings[mode].append(seconds)
+                with open_sweep(path) as store:
+                    regimes = np.array(store.regimes())
+                    counts[mode] = {str(g): int((regimes == g).sum()) for g in np.unique(regimes)}
+                    if mode == "watch":
+                        final = store.array("final_state")
+                        ratios = store.points()[:, 0]
+                        impacting = np.flatnonzero(regimes != "none")
+    waste = {}
+    for name, rtol in (("watch", converged.WATCH_RTOL), ("exponent", converged.EXPONENT_RTOL)):
+        rhs = accepted = rejected = events = 0
+        for i in impacting:
+            target = as_system(scene.with_params(period_ratio=float(ratios[i])))
+            flow = _with_solver(target, {"rtol": rtol, "atol": ATOL_PER_RTOL * rtol})
+            run = evolve(flow, final[i], cycles=cycles, start_at_section=True)
+            new_evals = METHODS[flow.method].new_evals
+            rhs += int(run.stats[kin.ST_RHS_EVALS])
+            accepted += int(run.stats[kin.ST_ACCEPTED])
+            rejected += int(run.stats[kin.ST_REJECTED])
+            events += int(run.stats[kin.ST_EVENTS])
+        n = len(impacting) * cycles
+        waste[name] = {"rtol": rtol, "accepted_per_cycle": accepted / n,
+                       "rejected_per_cycle": rejected / n, "event_steps_per_cycle": events / n,
+                       "rhs_per_cycle": rhs / n,
+                       "rhs_over_minimum": rhs / (new_evals * accepted)}
+    ideal = max(w["rhs_over_minimum"] for w in waste.values())
+    agreement_rows = {"watch": [0, 0], "no watch": [0, 0]}
+    per_file = {}
+    for sample in samples:
+        rows = json.loads(sample.read_text())["rows"]
+        tally = {"watch": 0, "no watch": 0, "watch_reproduces_stored": 0}
+        for row in rows:
+            name = row["set"]
+            scene_r = load_preset(name.split()[0])
+            if name.endswith("map"):
+                axes = (parse_axis("gap=0.5:2.0#200"), parse_axis("period_ratio=0.3:2.0#200"))
+            else:
+                axes = (parse_axis("period_ratio=0.3:2.0#1000"),)
+            spec_r = SweepSpec(axes=axes)
+            for mode in ("watch", "no watch"):
+                converged.CHAOS_WATCH = watch if mode == "watch" else 0
+                try:
+                    result = run_task(scene_r, spec_r, [int(row["index"])], None, False)[-1]
+                finally:
+                    converged.CHAOS_WATCH = watch
+                label = result.regime
+                if label in ("periodic", "group-periodic"):
+                    label = f"{label} {result.impacts_per_period}-{result.period_cycles}"
+                agree = row["careful"] != "unresolved" and label == row["careful"]
+                tally[mode] += agree
+                if mode == "watch":
+                    tally["watch_reproduces_stored"] += label == row["converged"]
+                agreement_rows[mode][0] += agree
+                agreement_rows[mode][1] += 1
+        per_file[sample.name] = {"points": len(rows), **tally}
+    baseline_file = RESULTS / "bench_classify_baseline.json"
+    old_full = float(np.median(json.loads(baseline_file.read_text())["wall_s"]["old full"]))
+    seconds = {mode: float(np.median(t)) for mode, t in timings.items()}
+    return {
+        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+        "slice": f"fig4 period_ratio=0.3:2.0#{points}",
+        "scan_wall_s": timings,
+        "regimes": counts,
+        "old_full_wall_s": old_full,
+        "ratio": {mode: old_full / s for mode, s in seconds.items()},
+        "engine_waste": waste,
+        "ratio_with_ideal_engine": {mode: ideal * old_full / s for mode, s in seconds.items()},
+        "agreement": {mode: {"agree": a, "points": n, "share": a / n}
+                      for mode, (a, n) in agreement_rows.items()},
+        "agreement_by_sample": per_file,
     }
 
 
@@ -515,6 +644,14 @@ def main() -> None:
     bu.add_argument("--points", type=int, default=1000)
     bu.add_argument("--floor-rtol", type=float, default=1e-4)
     bu.add_argument("--output", type=Path, default=RESULTS / "classify_budget.json")
+    bo = sub.add_parser("bound")
+    bo.add_argument("--points", type=int, default=1000)
+    bo.add_argument("--rounds", type=int, default=2)
+    bo.add_argument("--cycles", type=int, default=50)
+    bo.add_argument("--samples", type=Path, nargs="+", default=[
+        RESULTS / "classify_agreement.json", *(RESULTS / f"classify_agreement_seed{k}.json"
+                                              for k in (18, 19, 20))])
+    bo.add_argument("--output", type=Path, default=RESULTS / "classify_bound.json")
     ch = sub.add_parser("changes")
     ch.add_argument("--preset", required=True)
     ch.add_argument("--old", type=Path, required=True, help="the store before")
@@ -537,6 +674,9 @@ def main() -> None:
         out = table()
     elif args.part == "budget":
         out = budget(args.points, args.floor_rtol)
+        args.output.write_text(json.dumps(out, indent=1) + "\n")
+    elif args.part == "bound":
+        out = bound(args.points, args.rounds, args.samples, args.cycles)
         args.output.write_text(json.dumps(out, indent=1) + "\n")
     elif args.part == "changes":
         from chaospound.sweep import single_thread_blas
