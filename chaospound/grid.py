@@ -313,6 +313,10 @@ def check_axis(scene: Scene, axis: Axis) -> None:
        ``max_steps``), an integral value: not an interval;
     6. choice and boolean parameters refuse every float.
 
+    An axis of a contact input that the scene's contact law does not read
+    (:meth:`Scene.unused_contact_inputs`, e.g. ``restitution`` under the elastic
+    ``hertz`` law) is refused too: its points would all be the same.
+
     1-4 and 6 make the valid values an interval (empty for 6): if the smallest and
     the largest value of the grid are valid, every value between them is. 5 is
     checked on every value at once with numpy (the first non-integral value, if
@@ -323,6 +327,11 @@ def check_axis(scene: Scene, axis: Axis) -> None:
     tests/test_input_limits.py compares the two ways.
     """
     scene = _target(scene)
+    if not _is_system(scene) and axis.name in scene.unused_contact_inputs():
+        from .scene import not_read_message
+
+        raise ValueError(f"sweep {axis.name}={shorten(axis.spec)}: every point would be the "
+                         f"same: {not_read_message(scene.contact.contact_law, axis.name)}")
     bad = _first_invalid(scene, axis.name, axis.values)
     if bad is not None:
         value, exc = bad

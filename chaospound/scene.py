@@ -168,6 +168,31 @@ class SceneError(ValueError):
         super().__init__(" ".join(str(message).split()))
 
 
+def _law_reads(law: str) -> dict[str, bool]:
+    """Which of the contact inputs beside ``beta`` (read by every law) a law reads:
+    what its module's ``block`` takes (``chi``, ``variant`` for ``damping_variant``,
+    ``no_pull``), and ``restitution`` where it is dissipative."""
+    import importlib
+    import inspect
+
+    module = importlib.import_module(LAWS[law])
+    accepted = inspect.signature(module.block).parameters
+    return {"chi": "chi" in accepted, "restitution": bool(module.DISSIPATIVE),
+            "damping_variant": "variant" in accepted, "no_pull": "no_pull" in accepted}
+
+
+def laws_reading(name: str) -> tuple[str, ...]:
+    """The contact laws that read the contact input ``name`` (all of them for ``beta``
+    and any other parameter)."""
+    return tuple(law for law in LAWS if _law_reads(law).get(name, True))
+
+
+def not_read_message(law: str, name: str) -> str:
+    """Why a contact input ``name`` has no effect under ``law``, and which laws read it."""
+    return (f"the {law} contact law does not read {name} (read by "
+            f"{', '.join(laws_reading(name))}: set contact_law; docs/contact_laws.md)")
+
+
 # ===================================================== parameter specs
 @dataclass(frozen=True)
 class _Spec:
@@ -1108,6 +1133,30 @@ class Scene:
         if ground is not None:  # after the law's block
             p = np.concatenate((p, ground))
         return p
+
+    def unused_contact_inputs(self, *, changed_only: bool = False) -> tuple[str, ...]:
+        """The contact inputs that the scene's law does not read.
+
+        ``beta`` is read by every law (as ``k`` by the linear ones); ``chi`` only
+        by the Hertz-type laws, ``restitution`` only by the dissipative ones,
+        ``damping_variant`` only by hertzdamp and ``no_pull`` only by
+        kelvin-voigt (:meth:`law_block`: what the law module's ``block`` takes).
+
+        Parameters
+        ----------
+        changed_only : bool
+            Only those whose value differs from its default (what a user set in
+            vain, e.g. ``restitution`` with the elastic ``hertz`` law).
+
+        Returns
+        -------
+        tuple of str
+            Flat parameter names, in the order of :data:`PARAMETERS`.
+        """
+        reads = _law_reads(self.contact.contact_law)
+        defaults = {f.name: f.default for f in dataclasses.fields(Contact)}
+        return tuple(name for name, read in reads.items() if not read and not (
+            changed_only and getattr(self.contact, name) == defaults[name]))
 
     def law_block(self) -> np.ndarray:
         """The contact law's block of the packed vector: its parameters, then its memory.

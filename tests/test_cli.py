@@ -16,6 +16,7 @@ import pytest
 
 from chaospound import cli
 from chaospound.cli import main
+from chaospound.kernels.params import P_CHI
 from chaospound.scene import PARAMETERS, Scene, list_presets, load_preset
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -450,6 +451,46 @@ def test_empty_scene_file_says_which_defaults_it_runs(capsys, tmp_path):
     path.write_text("[structure]\ngap = 0.5\n", encoding="utf-8")
     code, out, err = run(capsys, "simulate", str(path), *SHORT, "--json")
     assert code == 0 and err == ""
+
+
+@pytest.mark.parametrize(("law", "name", "value"), [
+    ("hertz", "restitution", "0.5"), ("linear", "chi", "2"), ("linear", "no_pull", "true"),
+    ("hunt-crossley", "damping_variant", "ye"),
+])
+def test_a_contact_input_the_law_does_not_read_is_noted(capsys, law, name, value):
+    """--set restitution=0.5 under the elastic hertz law changes nothing (the packed
+    parameters are the same): one note says so and names the laws that read it."""
+    def scene_of(*assignments):
+        args = cli.build_parser().parse_args(
+            ["simulate", "--preset", "wall", "--set", f"contact_law={law}",
+             *(item for a in assignments for item in ("--set", a))])
+        return cli.scene_from_args(args)
+
+    plain = scene_of()
+    assert capsys.readouterr() == ("", "")
+    scene = scene_of(f"{name}={value}")
+    out, err = capsys.readouterr()
+    assert out == ""
+    [line] = err.splitlines()
+    assert line.startswith(f"chaospound: note: {name} = {value} has no effect: ")
+    assert f"the {law} contact law does not read {name}" in line
+    # (every law but hertz reads its block after N_PARAMS, not Hertz's chi slot P_CHI)
+    slots = [] if law == "hertz" else [P_CHI]
+    np.testing.assert_array_equal(np.delete(scene.pack(), slots), np.delete(plain.pack(), slots))
+    # a law that reads it: no note
+    reader = {"restitution": "hertzdamp", "chi": "hertz", "no_pull": "kelvin-voigt",
+              "damping_variant": "hertzdamp"}[name]
+    scene_of(f"contact_law={reader}", f"{name}={value}")
+    assert capsys.readouterr() == ("", "")
+
+
+def test_a_sweep_over_a_contact_input_the_law_does_not_read_is_refused(capsys, tmp_path):
+    out_file = tmp_path / "r.h5"
+    code, out, err = run(capsys, "sweep", "--preset", "wall", "--param",
+                         "restitution=0.3:0.9#4", "-o", str(out_file))
+    assert_one_line_error(code, out, err, "sweep restitution=0.3:0.9#4",
+                          "every point would be the same", "hertz contact law")
+    assert not out_file.exists()
 
 
 @pytest.mark.parametrize(("options", "expected"), [

@@ -14,12 +14,14 @@ from hypothesis import strategies as st
 
 from chaospound.kernels import params as P
 from chaospound.scene import (
+    CONTACT_LAWS,
     PARAMETERS,
     STATE_NAMES,
     Scene,
     SceneError,
     Solver,
     Tower,
+    laws_reading,
     list_presets,
     load_preset,
     load_scene,
@@ -576,3 +578,28 @@ def test_initial_vector_restricts_the_state():
     assert scene.initial_vector(P.WALL).tolist() == [1.0, 2.0]
     assert load_preset("wall").initial_vector().tolist() == [0.0, 0.0]
     assert STATE_NAMES[P.PAIR] == ("X_A", "dX_A", "X_B", "dX_B")
+
+
+@pytest.mark.parametrize("law", CONTACT_LAWS)
+def test_the_contact_inputs_a_law_does_not_read_leave_its_parameters_unchanged(law):
+    """Scene.unused_contact_inputs names exactly the inputs whose change leaves the packed
+    parameter vector (all the engine reads besides the law's name) unchanged. The fixed
+    layout keeps Hertz's chi slot P_CHI for every law; only the hertz law reads it (its
+    block is (P_BETA, P_CHI), the others' follows N_PARAMS: engine.compose.law_base)."""
+    other = {"chi": 2.0, "restitution": 0.4, "damping_variant": "ye", "no_pull": True}
+
+    def read(scene):
+        packed = scene.pack()
+        return packed if law == "hertz" else np.delete(packed, P.P_CHI)
+
+    for preset in ("fig4", "wall"):
+        scene = load_preset(preset).with_params(contact_law=law)
+        unused = scene.unused_contact_inputs()
+        assert scene.unused_contact_inputs(changed_only=True) == ()
+        for name, value in other.items():
+            changed = scene.with_params(**{name: value})
+            same = np.array_equal(read(changed), read(scene))
+            assert same == (name in unused), (preset, law, name)
+            assert changed.unused_contact_inputs(changed_only=True) == (
+                (name,) if name in unused else ())
+            assert (law in laws_reading(name)) == (name not in unused)

@@ -128,7 +128,9 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
         if getattr(args, name, None) is not None
     ]
     assignments = list(args.assignments) + overrides
-    return scene.with_assignments(assignments) if assignments else scene
+    scene = scene.with_assignments(assignments) if assignments else scene
+    _note_unread_contact_inputs(scene)
+    return scene
 
 
 #: run and solver settings of a System that --set may change (name -> parser)
@@ -219,6 +221,19 @@ def _is_system(target) -> bool:
 FILE_DEFAULTS_SHOWN = ("period_ratio", "freq_ratio", "mass_ratio", "gap", "beta", "chi",
                        "length_A", "width_ratio_A", "zeta_x_A", "method", "rtol", "transient",
                        "record")
+
+
+def _note_unread_contact_inputs(scene: Scene) -> None:
+    """A contact input set to other than its default that the scene's law does not read
+    (``restitution`` with the elastic ``hertz`` law) changes nothing: say so on stderr
+    rather than let the run look like what was asked for."""
+    from chaospound.scene import not_read_message
+
+    for name in scene.unused_contact_inputs(changed_only=True):
+        value = getattr(scene.contact, name)
+        shown = f"{value:g}" if isinstance(value, float) else str(value).lower()
+        _note(f"{name} = {shown} has no effect: "
+              f"{not_read_message(scene.contact.contact_law, name)}")
 
 
 def _note_file_defaults(path: str, scene: Scene) -> None:
