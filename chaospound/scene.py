@@ -220,7 +220,7 @@ class _Spec:
                 return "must be " + (", ".join(values[:-1]) + " or " + values[-1]
                                      if 1 < len(values) <= 4 else
                                      f"an integer in [{self.low:g}, {self.high:g})")
-            return f"must be in [{self.low:g}, {self.high:g})"
+            return f"must be in {'(' if self.low_open else '['}{self.low:g}, {self.high:g})"
         if self.low is not None:
             op = ">" if self.low_open else ">="
             kind = "an integer " if self.kind == "int" else ""
@@ -312,7 +312,8 @@ _SOLVER_SPECS: dict[str, _Spec] = {
         "Runge-Kutta scheme; 'paper': cash-karp at rtol 1e-3",
         choices=METHODS + METHOD_ALIASES,
     ),
-    "rtol": _pos("relative tolerance of the adaptive step"),
+    "rtol": _Spec("float", "relative tolerance of the adaptive step", low=0.0, low_open=True,
+                  high=1.0),
     "atol": _pos("absolute tolerance of the adaptive step"),
     "steps_per_cycle": _Spec("int", "fixed rk4 steps per excitation period", low=4),
     "max_steps": _Spec("int", "step budget of one integration", low=1),

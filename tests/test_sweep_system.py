@@ -330,6 +330,19 @@ def test_cli_bad_system_specs_are_one_line_and_exit_2(tmp_path, capsys, spec, wo
     assert code == 2 and "system 'stop' has: c, gap, beta, r" in err
 
 
+@pytest.mark.parametrize("rtol", ["1", "2", "1e3"])
+def test_an_rtol_of_one_or_more_is_refused_for_scenes_and_systems(tmp_path, capsys, rtol):
+    """rtol >= 1 asks for no accuracy at all: refused in one line (it used to run into a
+    non-finite state, exit 1)."""
+    file = tmp_path / "osc.py"
+    file.write_text(SYSTEM_FILE)
+    for target in ([f"{file}:system"], ["--preset", "wall"]):
+        for option in (["--rtol", rtol], ["--set", f"rtol={rtol}"]):
+            code, out, err = _cli(capsys, "simulate", *target, *option)
+            assert code == 2 and out == "" and err.count("\n") == 1, err
+            assert "rtol" in err and "(0, 1)" in err
+
+
 def test_a_second_process_loads_the_system_from_the_disk_cache(tmp_path):
     """The first process compiles the user's engine (into a fresh cache); the second finds
     the same content-hashed module, hence numba's cached machine code."""

@@ -195,6 +195,8 @@ def _system_with_assignments(system, assignments: Sequence[str]):
                                f"{', '.join(METHOD_NAMES)}")
             if isinstance(parsed, float) and not (math.isfinite(parsed) and parsed > 0.0):
                 raise CliError(f"--set {name}={shorten(value)}: need a finite number > 0")
+            if name == "rtol" and parsed >= 1.0:  # as a scene's rtol (scene.PARAMETERS)
+                raise CliError(f"--set rtol={shorten(value)}: need rtol in (0, 1)")
             if isinstance(parsed, int) and parsed < (1 if name != "transient" else 0):
                 raise CliError(f"--set {name}={shorten(value)}: too small")
             system = dataclasses.replace(system, **{name: parsed})
