@@ -175,7 +175,8 @@ class BasinMap:
         else:
             lines.append(f"basin entropy S_b = {self.entropy:.4f}, boundary basin entropy "
                          f"S_bb = {self.boundary_entropy:.4f} ({self.boundary_boxes} of "
-                         f"{self.boxes} boxes of {self.box} cells on a boundary; "
+                         f"{self.boxes} boxes of {box_text(self.labels.shape, self.box)} on a "
+                         "boundary; "
                          f"ln 2 = {math.log(2):.4f})")
         return "\n".join(lines)
 
@@ -405,6 +406,21 @@ def _canonical_rotation(items: list[str]) -> tuple[str, ...]:
 # ============================================================== basin entropy
 
 
+def box_sides(shape: tuple[int, ...], box: int = BOX) -> tuple[int, int]:
+    """The cells a side of the basin entropy's boxes on a grid of ``shape``: runs of
+    ``box`` cells on a one-axis grid, ``box`` x ``box`` on a two-axis grid, each side
+    clipped to the grid's (a 100 x 3 grid has boxes of 5 x 3 cells)."""
+    if len(shape) == 1:
+        return 1, box
+    return min(box, shape[0]), min(box, shape[1])
+
+
+def box_text(shape: tuple[int, ...], box: int = BOX) -> str:
+    """The boxes of :func:`box_sides` in words: "5 cells", "5 x 5 cells", "5 x 3 cells"."""
+    rows, cols = box_sides(shape, box)
+    return f"{cols} cells" if len(shape) == 1 else f"{rows} x {cols} cells"
+
+
 def basin_entropy(labels: np.ndarray, box: int = BOX) -> tuple[float, float, int, int]:
     """Basin entropy S_b and boundary basin entropy S_bb of a label grid (Daza et al. 2016).
 
@@ -423,11 +439,9 @@ def basin_entropy(labels: np.ndarray, box: int = BOX) -> tuple[float, float, int
         Natural logarithms; NaN when no whole box fits.
     """
     labels = np.asarray(labels)
+    sides = box_sides(labels.shape, box)
     if labels.ndim == 1:
         labels = labels[None, :]
-        sides = (1, box)
-    else:
-        sides = (min(box, labels.shape[0]), min(box, labels.shape[1]))
     rows, cols = labels.shape[0] // sides[0], labels.shape[1] // sides[1]
     entropies = []
     for r in range(rows):

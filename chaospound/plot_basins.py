@@ -17,7 +17,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from .basins import FAILED, PENDING, BasinMap
+from .basins import FAILED, PENDING, BasinMap, box_text
 from .plot import MISSING_COLOR, axis_label, cell_edges
 
 __all__ = ["BASIN_COLORS", "plot_basins"]
@@ -94,7 +94,8 @@ def plot_basins(result: BasinMap, *, state_names=None, fig: Figure | None = None
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
               frameon=False)
     entropy = (f"basin entropy $S_b$ = {result.entropy:.3f}, $S_{{bb}}$ = "
-               f"{result.boundary_entropy:.3f} ({result.box}x{result.box} boxes)"
+               f"{result.boundary_entropy:.3f} (boxes of "
+               f"{box_text(result.labels.shape, result.box)})"
                if result.boxes else f"no basin entropy (grid smaller than a {result.box}-cell box)")
     ax.set_title(f"{len(result.attractors)} attractor(s); {entropy}", fontsize=9)
     return fig

@@ -299,6 +299,23 @@ def test_cli_scans_plots_and_resumes(tmp_path, capsys):
     assert drawn.stat().st_size > 0
 
 
+def test_cli_says_what_an_unresolved_attractor_is_and_what_names_it(tmp_path, capsys):
+    """fig4 at T/T_Ax 0.9 is chaotic: the window of a short transient finds no period, the
+    report's attractor is 'unresolved', and a note points to --lyapunov (which names it)."""
+    from chaospound.cli import main
+
+    argv = ["basins", "--preset", "fig4", "--set", "period_ratio=0.9", "--set", "transient=20",
+            "--grid", "X_A=-0.5:0.5#2", "--quiet"]
+    assert main([*argv, "-o", str(tmp_path / "a.h5")]) == 0
+    out, err = capsys.readouterr()
+    assert "#0 unresolved" in out
+    [note] = err.splitlines()
+    assert note.startswith("chaospound: note: 'unresolved' here") and "--lyapunov" in note
+    assert main([*argv, "-o", str(tmp_path / "b.h5"), "--lyapunov"]) == 0
+    out, err = capsys.readouterr()
+    assert "#0 chaotic" in out and err == ""
+
+
 @pytest.mark.parametrize("grids, message", [
     (["X_B=0:1#3"], "unknown initial-condition axis 'X_B' (did you mean 'X_A'?); valid: "
                     "X_A, dX_A, initial_phase"),

@@ -14,6 +14,7 @@ from chaospound.cli.output import (
     CliError,
     _emit,
     _fail,
+    _note,
     _path,
 )
 from chaospound.cli.sweep import _check_sweep_output, _exponent_count
@@ -128,6 +129,11 @@ def _cmd_basins(args: argparse.Namespace) -> int:
                      + (f" (the first: {summary.messages[0]})" if summary.messages else ""),
                      EXIT_FAILURE)
     _emit(result.format())
+    if not args.lyapunov and any(a.regime == "unresolved" for a in result.attractors):
+        _note("'unresolved' here: no period within the record window after the scene's "
+              "transient (the window classification of a sweep point); --lyapunov names an "
+              "aperiodic attractor chaotic or quasi-periodic, a longer --set transient=N "
+              "lets slow starts settle")
     if args.plot is not None:
         from chaospound.plot import save
         from chaospound.plot_basins import plot_basins
