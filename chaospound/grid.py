@@ -107,7 +107,10 @@ def parse_axis(text: str, scene: Scene | None = None) -> Axis:
     or a comma-separated list of values.
 
     ``start:stop:step`` includes ``stop`` when it lies on the grid (to within
-    1e-9 of a step); ``start:stop#count`` is ``numpy.linspace(start, stop, count)``.
+    1e-9 of a step); ``start:stop#count`` is ``numpy.linspace(start, stop, count)``,
+    except that a grid whose step is a decimal (``0.85:0.95#5``: 0.025) holds the
+    doubles nearest its decimal values, as a step grid does (0.9, not
+    0.8999999999999999).
     With a ``scene`` (or a System) every value is checked against it
     (:func:`check_axis`).
     """
@@ -170,6 +173,9 @@ def grid_values(name: str, grid: str) -> np.ndarray:
             count = _count(shown, count_text)
             with np.errstate(over="ignore", invalid="ignore"):  # reported below
                 values = np.linspace(start, stop, count)
+            exact = _decimal_count_values(parts[0], parts[1], count)
+            if exact is not None:
+                values = exact
         else:
             if len(parts) != 3:
                 raise ValueError(f"{shown}: not a grid; {_SYNTAX}")
@@ -271,6 +277,33 @@ def _decimal_values(start: str, step: str, count: int) -> np.ndarray | None:
     if max(abs(first_n), abs(stride_n), abs(last_n)) >= 2**53:  # also a lone point's step
         return None
     return (first_n + stride_n * np.arange(count, dtype=np.int64)) / float(scale)
+
+
+def _decimal_count_values(start: str, stop: str, count: int) -> np.ndarray | None:
+    """``start:stop#count`` as the doubles nearest its decimal values, where its step
+    ``(stop - start) / (count - 1)`` is a decimal of at most 15 places.
+
+    ``0.85:0.95#5`` then holds the double of 0.9 (``numpy.linspace`` gives
+    0.8999999999999999), as ``0.85:0.95:0.025`` does (:func:`_decimal_values`).
+    None where the step is not such a decimal (``0.3:2.0#1000``: 1.7 / 999) or the
+    numbers do not fit: ``numpy.linspace`` is used.
+    """
+    if count < 2:
+        return None
+    try:
+        first, last = Decimal(start.strip()), Decimal(stop.strip())
+    except ArithmeticError:
+        return None
+    exponent = min(first.as_tuple().exponent, last.as_tuple().exponent, 0)
+    if not isinstance(exponent, int) or exponent < -15:
+        return None
+    scale = 10 ** -exponent
+    span = int(last * scale) - int(first * scale)
+    for extra in range(16 + exponent):  # decimals of the step beyond those typed
+        if span * 10**extra % (count - 1) == 0:
+            step = Decimal(span * 10**extra // (count - 1)).scaleb(exponent - extra)
+            return _decimal_values(start, str(step), count)
+    return None
 
 
 def _list(shown: str, grid: str) -> np.ndarray:

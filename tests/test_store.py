@@ -133,7 +133,8 @@ def test_schema_matches_the_documentation(both_file):
         assert float(f.attrs["wall_s"]) > 0.0
         assert list(f["grid"]) == ["period_ratio"]
         grid = f["grid"]["period_ratio"]
-        assert grid.dtype == np.float64 and bitwise(grid[()], np.linspace(0.6, 1.3, 8))
+        assert grid.dtype == np.float64  # 0.6:1.3#8: step 0.1, the typed decimals
+        assert grid[()].tolist() == [0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3]
         assert set(f) == {"grid", "forward", "backward"}
         sizes = {"N": 8, "n": n, "k": 2}
         for branch in ("forward", "backward"):
@@ -387,6 +388,29 @@ def test_grid_coordinates_are_the_typed_decimals(tmp_path):
         ds = sweep.to_xarray()
         assert ds.sel(period_ratio=0.8)["regime"].item() == sweep.regimes()[2]
         assert ds.sel(period_ratio=0.9)["steps"].item() == sweep.array("steps")[3]
+
+
+def test_count_grids_with_a_decimal_step_hold_the_typed_decimals(tmp_path):
+    """start:stop#count grids whose step is a decimal hold its decimals too (0.85:0.95#5:
+    0.9, where numpy.linspace gives 0.8999999999999999); other count grids stay
+    numpy.linspace bitwise (the fig4 scan's 0.3:2.0#1000, step 1.7 / 999)."""
+    from fractions import Fraction
+
+    axis = parse_axis("period_ratio=0.85:0.95#5", WALL)
+    assert axis.values.tolist() == [0.85, 0.875, 0.9, 0.925, 0.95]
+    for grid in ("0:1#11", "-8:4#121", "-2:2#201", "1.5:0.5#201", "0.5:3.0#26", "1e-3:2e-3#5"):
+        (start, stop), count = grid.split("#")[0].split(":"), int(grid.split("#")[1])
+        exact = [float(Fraction(start) + k * (Fraction(stop) - Fraction(start)) / (count - 1))
+                 for k in range(count)]  # the exact rational, correctly rounded
+        assert parse_axis(f"gap={grid}").values.tolist() == exact, grid
+    for grid in ("0.3:2.0#1000", "0.5:2.0#200", "0:1#3", "0.1:0.2#7"):
+        (start, stop), count = grid.split("#")[0].split(":"), int(grid.split("#")[1])
+        assert bitwise(parse_axis(f"gap={grid}").values,
+                       np.linspace(float(start), float(stop), count)), grid
+    path = tmp_path / "count.h5"
+    run_sweep(WALL, SweepSpec((axis,)), path, progress=False)
+    with open_sweep(path) as sweep:
+        assert sweep.to_xarray().sel(period_ratio=0.9)["regime"].item() == sweep.regimes()[2]
 
 
 def test_reader_repr_and_errors_name_the_valid_choices(both_file):
