@@ -585,7 +585,8 @@ def test_cli_classify_bad_input_is_one_line_exit_2(capsys, options):
     assert code == 2
     assert out == ""
     assert len(err.splitlines()) == 1 and err.startswith("chaospound: error: ")
-
+    if "--window" in options:  # in the options' words, with the bound
+        assert "--window 5: must be at least twice --max-period (16), >= 32" in err
 
 
 @pytest.mark.parametrize(("extra", "zero_one", "expected"), [

@@ -85,6 +85,9 @@ def _cmd_classify(args: argparse.Namespace) -> int:
         )
     if args.max_period < 1:
         raise CliError(f"--max-period {args.max_period}: must be an integer >= 1")
+    if args.window is not None and args.window < 2 * args.max_period:
+        raise CliError(f"--window {args.window}: must be at least twice --max-period "
+                       f"({args.max_period}), >= {2 * args.max_period}")
     if args.plot is not None:
         check_figure_path(args.plot)
     _load_kernels(args.quiet, warm=_system_warm(scene), **_engine_of(scene))

@@ -973,7 +973,8 @@ def _check_arguments(min_transient, max_transient, chunk, window, max_period, ly
     if int(chunk) < 1:
         raise ValueError(f"chunk = {chunk}: must be an integer >= 1")
     if int(window) < 2 * int(max_period):
-        raise ValueError(f"window = {window}: must be >= 2 max_period = {2 * int(max_period)}")
+        raise ValueError(f"window = {window}: must be at least twice max_period ({max_period}): "
+                         f">= {2 * int(max_period)}")
     if int(lyapunov_cycles) < 10:
         raise ValueError(f"lyapunov_cycles = {lyapunov_cycles}: must be an integer >= 10")
 
