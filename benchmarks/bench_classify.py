@@ -195,6 +195,19 @@ def baseline(old: Path, points: int, rounds: int, interval: str) -> dict:
     }
 
 
+def _old_full_wall_s() -> float:
+    """The old tree's ``--classify full`` wall time of the whole scan (the median of
+    results/bench_classify_baseline.json): what issue 17's 15x is read against."""
+    baseline = json.loads((RESULTS / "bench_classify_baseline.json").read_text())
+    return float(np.median(baseline["wall_s"]["old full"]))
+
+
+def _scan_header(points: int, old_full: float) -> dict:
+    """The first entries of ``budget``'s and ``bound``'s results."""
+    return {"command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+            "slice": f"fig4 period_ratio=0.3:2.0#{points}", "old_full_wall_s": old_full}
+
+
 def budget(points: int, floor_rtol: float) -> dict:
     """Where the default scan's time goes, and the floor of its chaos watch.
 
@@ -236,16 +249,13 @@ def budget(points: int, floor_rtol: float) -> dict:
         t0 = time.perf_counter()
         evolve(flow, final[i], cycles=CHAOS_WATCH, start_at_section=True)
         floor += time.perf_counter() - t0
-    baseline_file = RESULTS / "bench_classify_baseline.json"
-    old_full = float(np.median(json.loads(baseline_file.read_text())["wall_s"]["old full"]))
+    old_full = _old_full_wall_s()
     allowed = old_full / 15.0
     others = sum(v["wall_s"] for r, v in by_regime.items() if r != "chaotic")
     return {
-        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
-        "slice": f"fig4 period_ratio=0.3:2.0#{points}",
+        **_scan_header(points, old_full),
         "scan_wall_s": scan_wall,
         "by_regime": by_regime,
-        "old_full_wall_s": old_full,
         "budget_15x_s": allowed,
         "watch_floor": {"rtol": floor_rtol, "cycles": CHAOS_WATCH,
                         "chaotic_points": int(len(chaotic)), "seconds": floor},
@@ -357,15 +367,12 @@ def bound(points: int, rounds: int, samples: list[Path], cycles: int) -> dict:
                 agreement_rows[mode][0] += agree
                 agreement_rows[mode][1] += 1
         per_file[sample.name] = {"points": len(rows), **tally}
-    baseline_file = RESULTS / "bench_classify_baseline.json"
-    old_full = float(np.median(json.loads(baseline_file.read_text())["wall_s"]["old full"]))
+    old_full = _old_full_wall_s()
     seconds = {mode: float(np.median(t)) for mode, t in timings.items()}
     return {
-        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
-        "slice": f"fig4 period_ratio=0.3:2.0#{points}",
+        **_scan_header(points, old_full),
         "scan_wall_s": timings,
         "regimes": counts,
-        "old_full_wall_s": old_full,
         "ratio": {mode: old_full / s for mode, s in seconds.items()},
         "engine_waste": waste,
         "ratio_with_ideal_engine": {mode: ideal * old_full / s for mode, s in seconds.items()},

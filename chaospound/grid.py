@@ -254,6 +254,22 @@ def _range(shown: str, start: float, stop: float, step: float) -> np.ndarray:
     return values
 
 
+def _scaled_integers(*texts: str) -> tuple[list[int], int] | None:
+    """Decimal numbers as integers times ``10**exponent`` (one exponent, between -15 and
+    0: the most decimals written); None if one is not a decimal or has more places."""
+    try:
+        numbers = [Decimal(text.strip()) for text in texts]
+    except ArithmeticError:
+        return None
+    exponents = [n.as_tuple().exponent for n in numbers]
+    if not all(isinstance(e, int) for e in exponents):  # nan, inf
+        return None
+    exponent = min(*exponents, 0)
+    if exponent < -15:
+        return None
+    return [int(n * 10 ** -exponent) for n in numbers], exponent
+
+
 def _decimal_values(start: str, step: str, count: int) -> np.ndarray | None:
     """``start + k step`` as the doubles nearest the decimal values the user typed.
 
@@ -264,15 +280,11 @@ def _decimal_values(start: str, step: str, count: int) -> np.ndarray | None:
     integer below 2^53, exact in float64, and n / 10^d is one correctly rounded
     division. None when that does not hold (the float formula is used).
     """
-    try:
-        first, stride = Decimal(start.strip()), Decimal(step.strip())
-    except ArithmeticError:
+    scaled = _scaled_integers(start, step)
+    if scaled is None:
         return None
-    exponent = min(first.as_tuple().exponent, stride.as_tuple().exponent, 0)
-    if not isinstance(exponent, int) or exponent < -15:
-        return None
+    (first_n, stride_n), exponent = scaled
     scale = 10 ** -exponent
-    first_n, stride_n = int(first * scale), int(stride * scale)
     last_n = first_n + stride_n * (count - 1)
     if max(abs(first_n), abs(stride_n), abs(last_n)) >= 2**53:  # also a lone point's step
         return None
@@ -288,17 +300,11 @@ def _decimal_count_values(start: str, stop: str, count: int) -> np.ndarray | Non
     None where the step is not such a decimal (``0.3:2.0#1000``: 1.7 / 999) or the
     numbers do not fit: ``numpy.linspace`` is used.
     """
-    if count < 2:
+    scaled = _scaled_integers(start, stop) if count >= 2 else None
+    if scaled is None:
         return None
-    try:
-        first, last = Decimal(start.strip()), Decimal(stop.strip())
-    except ArithmeticError:
-        return None
-    exponent = min(first.as_tuple().exponent, last.as_tuple().exponent, 0)
-    if not isinstance(exponent, int) or exponent < -15:
-        return None
-    scale = 10 ** -exponent
-    span = int(last * scale) - int(first * scale)
+    (first_n, last_n), exponent = scaled
+    span = last_n - first_n
     for extra in range(16 + exponent):  # decimals of the step beyond those typed
         if span * 10**extra % (count - 1) == 0:
             step = Decimal(span * 10**extra // (count - 1)).scaleb(exponent - extra)
