@@ -63,6 +63,12 @@ watch (interleaved), both read against the careful labels stored in the four agr
 files, and the right-hand side evaluations a step-size controller that never rejects a
 step (and a free event location) could save. Writes results/classify_bound.json.
 
+``approach``: whether the trajectories that step 3 of the converged classification
+confirmed a stable orbit from go to it: for every such point of the fig4 scan, the
+trajectory run on for ``--cycles`` cycles from the section Newton's method started
+from, its distance to the orbit read along the way. Writes
+results/classify_approach.json.
+
 ``table``: the careful classifier (:func:`~chaospound.dynamics.classify.classify`, its
 defaults) at the T/T_Ax of docs/classification.md's "Measured" table, fig4 and
 fig4-translational; prints the table's rows.
@@ -77,6 +83,7 @@ Run: PYTHONPATH=. python benchmarks/bench_classify.py speed --points 50 --rounds
      PYTHONPATH=. python benchmarks/bench_classify.py table
      PYTHONPATH=. python benchmarks/bench_classify.py budget
      PYTHONPATH=. python benchmarks/bench_classify.py bound
+     PYTHONPATH=. python benchmarks/bench_classify.py approach
      PYTHONPATH=. python benchmarks/bench_classify.py changes --preset fig4 \
          --old before.h5 --new after.h5 --per-change 16
 """
@@ -382,6 +389,72 @@ def bound(points: int, rounds: int, samples: list[Path], cycles: int) -> dict:
     }
 
 
+def approach(points: int, cycles: int) -> dict:
+    """Whether the trajectory that step 3 confirmed a stable orbit from goes to it.
+
+    Step 3 of the converged classification reads a point from the stable orbit that
+    Newton's method found near the last section; it does not run the trajectory on to
+    see it arrive. Here every point of the fig4 scan (``points`` points, the default
+    sweep) that step 3 named so is checked: from the section Newton started from, the
+    trajectory runs ``cycles`` more cycles at rtol 1e-8, and its distance to the nearest
+    of the orbit's P sections (max norm, relative to the orbit's largest component) is
+    read at 0, 100, 500, 1000 and ``cycles`` cycles.
+    """
+    from chaospound.dynamics import converged
+    from chaospound.dynamics.classify import _with_solver
+    from chaospound.dynamics.system import as_system, evolve
+
+    found = []
+    newton = converged._Classifier._newton
+
+    def recording(self, period):
+        start, after = self._last().copy(), self.cycles
+        result = newton(self, period)
+        if result is not None and self.evidence.get("confirmed_by") == "newton":
+            found.append((start, after, result, self.evidence["max_multiplier"]))
+        return result
+
+    scene = load_preset("fig4")
+    spec = SweepSpec(axes=(parse_axis(f"period_ratio=0.3:2.0#{points}"),))
+    checkpoints = sorted({0, 100, 500, 1000, cycles})
+    rows = []
+    converged._Classifier._newton = recording
+    try:
+        for index in range(points):
+            found.clear()
+            label = run_task(scene, spec, [index], None, False)[-1].regime
+            if not found:
+                continue
+            start, after, result, mu = found[-1]
+            flow = _with_solver(as_system(scene.with_params(**spec.point_values(index))),
+                                {"rtol": 1e-8, "atol": 1e-10})
+            period = result.regime.period_cycles or 1
+            orbit = evolve(flow, result.record.strobe.state[0], cycles=period,
+                           start_at_section=True).sections[:period]
+            run = evolve(flow, start, cycles=cycles, start_at_section=True).sections
+            size = float(np.max(np.abs(orbit)))
+            distance = [float(np.min(np.max(np.abs(orbit - run[k]), axis=1)) / size)
+                        for k in checkpoints]
+            rows.append({"index": index, "values": spec.point_values(index), "label": label,
+                         "period": period, "max_multiplier": mu, "newton_after": after,
+                         "distance": distance})
+    finally:
+        converged._Classifier._newton = newton
+    last = np.array([r["distance"][-1] for r in rows])
+    first = np.array([r["distance"][0] for r in rows])
+    return {
+        "command": " ".join(["python benchmarks/bench_classify.py"] + sys.argv[1:]),
+        "slice": f"fig4 period_ratio=0.3:2.0#{points}",
+        "checkpoints": checkpoints,
+        "points_confirmed_by_newton": len(rows),
+        "closer_at_the_end": int(np.sum(last < first)),
+        "within_1e-5_at_the_end": int(np.sum(last < 1e-5)),
+        "largest_final_distance": float(last.max()) if rows else None,
+        "slowest": sorted(rows, key=lambda r: -r["distance"][-1])[:8],
+        "rows": rows,
+    }
+
+
 def _sample_sets(per_set: int, seed: int):
     """The sample: seeded, and without the first point of a row (the points once
     needed a grid predecessor to warm-start from; kept so that runs stay comparable)."""
@@ -651,6 +724,10 @@ def main() -> None:
     bu.add_argument("--points", type=int, default=1000)
     bu.add_argument("--floor-rtol", type=float, default=1e-4)
     bu.add_argument("--output", type=Path, default=RESULTS / "classify_budget.json")
+    ap = sub.add_parser("approach")
+    ap.add_argument("--points", type=int, default=1000)
+    ap.add_argument("--cycles", type=int, default=2000)
+    ap.add_argument("--output", type=Path, default=RESULTS / "classify_approach.json")
     bo = sub.add_parser("bound")
     bo.add_argument("--points", type=int, default=1000)
     bo.add_argument("--rounds", type=int, default=2)
@@ -681,6 +758,9 @@ def main() -> None:
         out = table()
     elif args.part == "budget":
         out = budget(args.points, args.floor_rtol)
+        args.output.write_text(json.dumps(out, indent=1) + "\n")
+    elif args.part == "approach":
+        out = approach(args.points, args.cycles)
         args.output.write_text(json.dumps(out, indent=1) + "\n")
     elif args.part == "bound":
         out = bound(args.points, args.rounds, args.samples, args.cycles)
