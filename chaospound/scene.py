@@ -168,15 +168,21 @@ class SceneError(ValueError):
         super().__init__(" ".join(str(message).split()))
 
 
-def _law_reads(law: str) -> dict[str, bool]:
-    """Which of the contact inputs beside ``beta`` (read by every law) a law reads:
-    what its module's ``block`` takes (``chi``, ``variant`` for ``damping_variant``,
-    ``no_pull``), and ``restitution`` where it is dissipative."""
+def _law_module(law: str):
+    """A contact law's module and the keyword inputs its ``block`` takes (``beta``,
+    ``chi``, ``k``, ``m_eff``, ``variant``, ``no_pull``: :meth:`Scene.law_block`)."""
     import importlib
     import inspect
 
     module = importlib.import_module(LAWS[law])
-    accepted = inspect.signature(module.block).parameters
+    return module, inspect.signature(module.block).parameters
+
+
+def _law_reads(law: str) -> dict[str, bool]:
+    """Which of the contact inputs beside ``beta`` (read by every law) a law reads:
+    what its module's ``block`` takes (``chi``, ``variant`` for ``damping_variant``,
+    ``no_pull``), and ``restitution`` where it is dissipative."""
+    module, accepted = _law_module(law)
     return {"chi": "chi" in accepted, "restitution": bool(module.DISSIPATIVE),
             "damping_variant": "variant" in accepted, "no_pull": "no_pull" in accepted}
 
@@ -1168,11 +1174,8 @@ class Scene:
         between the towers, 1 against a wall, docs/contact_laws.md), ``variant``
         and ``no_pull``.
         """
-        import importlib
-        import inspect
-
         contact = self.contact
-        module = importlib.import_module(LAWS[contact.contact_law])
+        module, accepted = _law_module(contact.contact_law)
         from chaospound.physics.contact.dissipation import effective_mass
 
         if self.opponent == "wall":
@@ -1181,7 +1184,6 @@ class Scene:
             m_eff = effective_mass(1.0, self.effective_mass_ratio)
         offered = {"beta": contact.beta, "chi": contact.chi, "k": contact.beta, "m_eff": m_eff,
                    "variant": contact.damping_variant, "no_pull": contact.no_pull}
-        accepted = inspect.signature(module.block).parameters
         try:
             e = contact.restitution if module.DISSIPATIVE else 1.0  # elastic: e = 1
             values = module.block(e, **{k: v for k, v in offered.items() if k in accepted})
